@@ -1,0 +1,73 @@
+"""Writing benchmark results into ``bench/RESULTS.md`` with the date and the machine.
+
+Each benchmark owns one section, delimited by HTML comments, so re-running one benchmark replaces its own
+section and leaves the others as they were measured.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import os
+import platform
+import re
+from pathlib import Path
+
+_HEADER = (
+    "# mrs_nav benchmark results\n\n"
+    "Written by `mrs-nav bench NAME`; each section is replaced when its benchmark runs again.\n"
+)
+
+
+def machine_description() -> str:
+    """One line naming the machine: CPU model, cores, memory, OS and Python."""
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    mem = ""
+    try:
+        kib = int(Path("/proc/meminfo").read_text().split()[1])
+        mem = f", {kib / 1024 / 1024:.0f} GiB RAM"
+    except (OSError, ValueError, IndexError):
+        pass
+    system = f"{platform.system()} {platform.release()}"
+    return f"{cpu}, {os.cpu_count()} cores{mem}, {system}, Python {platform.python_version()}"
+
+
+def default_results_path() -> Path:
+    """``bench/RESULTS.md`` of the source checkout when running from one, else of the current folder."""
+    checkout = Path(__file__).resolve().parents[3]
+    if (checkout / "package.xml").is_file() and (checkout / "bench").is_dir():
+        return checkout / "bench" / "RESULTS.md"
+    return Path.cwd() / "bench" / "RESULTS.md"
+
+
+def write_section(name: str, body: str, path: Path | None = None) -> Path:
+    """Replace (or append) the section of benchmark ``name`` with ``body``, stamped with date and machine."""
+    path = path or default_results_path()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    text = path.read_text(encoding="utf-8") if path.exists() else _HEADER
+    stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
+    section = (
+        f"<!-- bench:{name} -->\n## {name}\n\n"
+        f"Measured {stamp} on {machine_description()}.\n\n{body.strip()}\n<!-- /bench:{name} -->\n"
+    )
+    pattern = re.compile(rf"<!-- bench:{re.escape(name)} -->.*?<!-- /bench:{re.escape(name)} -->\n", re.S)
+    text = pattern.sub(lambda _: section, text) if pattern.search(text) else text.rstrip("\n") + "\n\n" + section
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def markdown_table(header: list[str], rows: list[list[object]]) -> str:
+    """A GitHub-flavoured markdown table; floats are printed with 4 significant digits."""
+
+    def cell(value: object) -> str:
+        return f"{value:.4g}" if isinstance(value, float) else str(value)
+
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(cell(v) for v in row) + " |" for row in rows]
+    return "\n".join(lines)

@@ -1,0 +1,1 @@
+"""The ``mrs-nav`` command: offline tools that need no ROS master."""

@@ -1,0 +1,50 @@
+"""Entry point of ``mrs-nav``: one subcommand per module in :mod:`mrs_nav.cli`.
+
+Each subcommand module exposes ``register(subparsers)``, which adds its parser and sets ``handler`` to a
+typed function returning the exit code. Domain errors (:class:`MrsNavError`) become one ``ERROR:`` line and
+exit 1; anything else is a bug and keeps its traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+from mrs_nav import __version__
+from mrs_nav.cli.common import fail
+from mrs_nav.errors import MrsNavError
+
+SUBCOMMANDS = ("demo", "figures", "plan", "replay", "carmen2bag", "bench", "monitor")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="mrs-nav",
+        description="mrs_nav offline tools: simulate, plan, replay bags, benchmark and monitor; no ROS master needed.",
+    )
+    parser.add_argument("--version", action="version", version=f"mrs-nav {__version__}")
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in SUBCOMMANDS:
+        importlib.import_module(f"mrs_nav.cli.{name}").register(subparsers)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help()
+        return 1
+    try:
+        code: int = args.handler(args)
+    except MrsNavError as err:
+        return fail(str(err))
+    except KeyboardInterrupt:
+        return fail("interrupted", 130)
+    return code
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,29 @@
+"""Exceptions shared by the core library.
+
+Every error the core raises on bad input derives from :class:`MrsNavError`, so the command line and the nodes
+can turn it into one clear line without catching unrelated bugs.
+"""
+
+
+class MrsNavError(Exception):
+    """Base class for errors caused by the caller's input or files."""
+
+
+class InvalidInputError(MrsNavError, ValueError):
+    """A number, pose, goal, obstacle list or parameter is malformed or out of range."""
+
+
+class WorldFileError(MrsNavError):
+    """A world file cannot be read or holds something the simulator cannot honour."""
+
+
+class MapFileError(MrsNavError):
+    """A map_server map (.yaml + .pgm) cannot be read or written."""
+
+
+class BagError(MrsNavError):
+    """A bag is unreadable, truncated, or lacks the topics a tool needs."""
+
+
+class NoPathFoundError(MrsNavError):
+    """A planner used its budget without reaching the goal."""

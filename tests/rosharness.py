@@ -1,0 +1,113 @@
+"""Real ROS 1 for integration tests: a roscore on a free port, roslaunch runs, bounded waits.
+
+One master serves the whole pytest session (rospy can join only one master per process); each test starts
+its own ``roslaunch`` against it and every process it started is ended when the test ends. Waits are bounded
+in wall-clock time and sim time runs at the simulator's maximum rate, so no test sleeps for sim seconds.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+import xmlrpc.client
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def free_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+def ros_env(master_uri: str, log_dir: Path) -> dict[str, str]:
+    """Environment for ROS processes: this checkout as the package, the running interpreter's venv first."""
+    env = dict(os.environ)
+    env["ROS_MASTER_URI"] = master_uri
+    env["ROS_PACKAGE_PATH"] = str(REPO)
+    env["ROS_HOME"] = str(log_dir)
+    env["ROS_LOG_DIR"] = str(log_dir)
+    env["ROS_PYTHON_VERSION"] = "3"
+    env["ROS_IP"] = "127.0.0.1"
+    env["PATH"] = f"{Path(sys.executable).parent}:{env.get('PATH', '')}"
+    env["PYTHONPATH"] = f"{REPO / 'src'}:{env.get('PYTHONPATH', '')}".rstrip(":")
+    env["PYTHONUNBUFFERED"] = "1"
+    return env
+
+
+def wait_for(predicate: Callable[[], bool], timeout: float, what: str, period: float = 0.05) -> None:
+    """Poll ``predicate`` until it holds; fail the test naming ``what`` after ``timeout`` wall seconds."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return
+        time.sleep(period)
+    raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
+
+
+def stop(proc: subprocess.Popen[bytes], grace: float = 10.0) -> None:
+    """SIGINT the process group (as Ctrl-C would), then SIGKILL whatever is left."""
+    if proc.poll() is None:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGINT)
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            proc.wait(timeout=grace)
+    with contextlib.suppress(ProcessLookupError):
+        os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait(timeout=5)
+
+
+class RosMaster:
+    """A roscore on a free loopback port, with its logs under ``log_dir``."""
+
+    def __init__(self, log_dir: Path) -> None:
+        self.port = free_port()
+        self.uri = f"http://127.0.0.1:{self.port}"
+        self.log_dir = log_dir
+        self.env = ros_env(self.uri, log_dir)
+        self.proc = subprocess.Popen(
+            ["roscore", "-p", str(self.port)],
+            env=self.env,
+            start_new_session=True,
+            stdout=(log_dir / "roscore.out").open("wb"),
+            stderr=subprocess.STDOUT,
+        )
+        wait_for(self.is_up, 30.0, f"roscore on port {self.port}")
+
+    def is_up(self) -> bool:
+        if self.proc.poll() is not None:
+            raise AssertionError(f"roscore exited with {self.proc.returncode}; see {self.log_dir}/roscore.out")
+        try:
+            code, _, _ = xmlrpc.client.ServerProxy(self.uri).getPid("/pytest")
+        except OSError:
+            return False
+        return bool(code == 1)
+
+    def close(self) -> None:
+        stop(self.proc)
+
+    @contextlib.contextmanager
+    def launch(self, launch_file: str, *args: str, name: str | None = None) -> Iterator[subprocess.Popen[bytes]]:
+        """Run ``roslaunch mrs_nav LAUNCH_FILE ARGS`` for the duration of the ``with`` block."""
+        log = self.log_dir / f"{name or Path(launch_file).stem}-{time.monotonic_ns()}.log"
+        with log.open("wb") as out:
+            proc = subprocess.Popen(
+                ["roslaunch", "--wait", "mrs_nav", launch_file, *args],
+                env=self.env,
+                start_new_session=True,
+                stdout=out,
+                stderr=subprocess.STDOUT,
+            )
+            try:
+                yield proc
+            finally:
+                stop(proc)
+        # Keep the launch log next to the failure: pytest shows it with -rA on error.
+        print(f"roslaunch log: {log}")
