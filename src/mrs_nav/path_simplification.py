@@ -30,8 +30,8 @@ def simplify_path(points: npt.ArrayLike, free: SegmentChecker, *, backtrack: boo
 
     ``backtrack=False`` skips step 2 (to show what back-tracking adds).
 
-    If some consecutive input segment is not free, the result keeps that segment as it is (the checker
-    cannot do better than the input there).
+    Where the input itself crosses an obstacle and no shortcut avoids it, the result keeps the input's
+    segment: the simplification never makes a path worse, but it cannot repair one.
     """
     pts = np.asarray(points, dtype=np.float64)[:, :2]
     n = pts.shape[0]

@@ -9,7 +9,9 @@ Repulsive field of obstacle ``i``, from ``U_i = U_max exp(-d_i(x) / lambda)`` wi
 
     V_i(x) = V_max n_i(x) exp(-d_i(x) / lambda)     outside,     0 inside,     V_max = U_max / (2 lambda)
 
-``lambda`` (m) sets the reach: every ``lambda ln 2`` of distance halves the push. ``V_max`` must beat the
+``lambda`` (m) sets the reach: every ``lambda ln 2`` of distance halves the push. (The exact derivative of
+``U_i`` has ``U_max / lambda`` in place of ``2 V_max``; only ``V_max`` matters to the motion, so it is the
+parameter here.) ``V_max`` must beat the
 attraction right at an obstacle, ``V_max > max_x |x_g - x|`` over the workspace; :meth:`PotentialField.build`
 takes ``V_max = factor * max_x |x_g - x|`` with ``factor = 2`` as the assignment found to work well.
 
@@ -148,10 +150,15 @@ class PotentialField:
         return cap(v, self.max_speed)
 
     def potential(self, points: npt.ArrayLike) -> FloatArray:
-        """``U = |x - x_g|^2 / 2 + sum_i U_max exp(-d_i / lambda)`` (``U_max = 2 lambda V_max``), ``(P,)``."""
+        """``U = |x - x_g|^2 / 2 + sum_i U_max exp(-d_i / lambda)`` at each point, ``(P,)``.
+
+        The exact derivative of ``U_max exp(-d / lambda)`` has magnitude ``U_max / lambda`` at the surface; the
+        assignment's ``V_max = U_max / (2 lambda)`` carries an extra factor 1/2. Here ``U_max = lambda V_max``
+        so that the uncapped field is exactly ``-grad U`` outside the obstacles.
+        """
         p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
         dist, _ = self.obstacles.surface(p)
-        u_max = 2.0 * self.decay * self.v_max
+        u_max = self.decay * self.v_max
         repulsive = (u_max * np.exp(-np.maximum(dist, 0.0) / self.decay)).sum(axis=1)
         attractive = 0.5 * np.sum((p - np.asarray(self.goal)) ** 2, axis=1)
         return np.asarray(attractive + repulsive, dtype=np.float64)

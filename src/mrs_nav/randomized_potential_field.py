@@ -64,18 +64,16 @@ class EscapeSettings:
     walk_angle_std: float = math.pi
 
     def __post_init__(self) -> None:
-        values = (
-            self.dt,
-            self.goal_tolerance,
-            self.noise_std,
-            self.stall_speed,
-            self.stall_distance,
-            self.walk_angle_std,
-        )
-        if not all(math.isfinite(v) and v >= 0.0 for v in values) or self.dt <= 0.0:
-            raise InvalidInputError(f"escape settings must be finite, >= 0 and dt > 0, got {self}")
-        if self.max_steps < 1 or self.stall_steps < 1 or self.min_walk_steps < 0:
-            raise InvalidInputError(f"step counts must be positive, got {self}")
+        for name in ("dt", "goal_tolerance", "noise_std", "stall_speed", "stall_distance", "walk_angle_std"):
+            value = getattr(self, name)
+            if not math.isfinite(value) or value < 0.0 or (name == "dt" and value == 0.0):
+                raise InvalidInputError(
+                    f"{name} must be a finite number {'> 0' if name == 'dt' else '>= 0'}, got {value}"
+                )
+        for name in ("max_steps", "stall_steps", "min_walk_steps"):
+            value = getattr(self, name)
+            if value < (0 if name == "min_walk_steps" else 1):
+                raise InvalidInputError(f"{name} must be {'>= 0' if name == 'min_walk_steps' else '>= 1'}, got {value}")
 
 
 @dataclass(frozen=True)
@@ -102,6 +100,8 @@ def roll_out(
 ) -> list[Rollout]:
     """Simulate the randomised descent from ``start`` once per seed, vectorised over the seeds."""
     s = settings
+    if any(seed < 0 for seed in seeds):
+        raise InvalidInputError(f"seeds must be >= 0, got {min(seeds)}")
     start_xy = np.asarray(start, dtype=np.float64)
     if field.obstacles.contains(start_xy)[0]:
         raise InvalidInputError(f"start ({start[0]}, {start[1]}) is inside an obstacle")

@@ -36,7 +36,7 @@ _ARC_SAMPLES = 16
 
 @dataclass(frozen=True)
 class ShortestPath:
-    """Length (m) and a polyline ``(N, 2)`` of the shortest path (arcs drawn with a few points each)."""
+    """Length (m) of the shortest path and a polyline ``(N, 2)`` drawing it (arcs outlined from outside)."""
 
     length_m: float
     points: FloatArray
@@ -68,6 +68,19 @@ def _bitangents(c1: FloatArray, c2: FloatArray) -> list[tuple[FloatArray, FloatA
             n = m * u + side * math.sqrt(1.0 - m * m) * u_perp
             out.append((c1[:2] - c1[2] * n, c2[:2] - s * c2[2] * n))
     return out
+
+
+def _arc_outline(circle: FloatArray, start_angle: float, sweep: float) -> FloatArray:
+    """Corners of a polyline hugging an arc from outside (each of its edges touches the circle), ends excluded.
+
+    With ``m`` pieces of angle ``delta = sweep / m`` the corners sit at angles ``start + (k + 1/2) delta`` and
+    radius ``r / cos(delta / 2)``, so the drawn path is collision free and only slightly longer than the arc.
+    """
+    pieces = max(1, math.ceil(abs(sweep) / (math.pi / 16)))
+    delta = sweep / pieces
+    theta = start_angle + delta * (np.arange(pieces) + 0.5)
+    radius = circle[2] / math.cos(delta / 2.0)
+    return np.asarray(circle[:2] + radius * np.column_stack([np.cos(theta), np.sin(theta)]), dtype=np.float64)
 
 
 def shortest_path(start: tuple[float, float], goal: tuple[float, float], circles: Obstacles) -> ShortestPath:
@@ -161,9 +174,6 @@ def shortest_path(start: tuple[float, float], goal: tuple[float, float], circles
     drawn = [xy[0]]
     for k1, k2 in itertools.pairwise(chain):
         if (k1, k2) in arcs:
-            i, t1, sweep = arcs[(k1, k2)]
-            theta = t1 + sweep * np.linspace(0.0, 1.0, _ARC_SAMPLES)[1:]
-            drawn.extend(obs[i, :2] + obs[i, 2] * np.column_stack([np.cos(theta), np.sin(theta)]))
-        else:
-            drawn.append(xy[k2])
+            drawn.extend(_arc_outline(obs[arcs[(k1, k2)][0]], *arcs[(k1, k2)][1:]))
+        drawn.append(xy[k2])
     return ShortestPath(float(best[1]), np.array(drawn))

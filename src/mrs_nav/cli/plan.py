@@ -8,6 +8,7 @@ arguments, the start pose and the goal returning a :class:`~mrs_nav.planning.Pla
 from __future__ import annotations
 
 import argparse
+import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -67,6 +68,9 @@ def register(subparsers: Any) -> None:
         help="one planning query on a world or a list of circles",
         description="Plan from --start to --goal. Exit 0 when the goal is reached, 2 when not, 1 on bad input.",
     )
+    # Let "--start -1.5,-1.5,0" through: argparse takes only plain numbers like "-1.5" for negative values, and
+    # would read a comma-separated list starting with "-" as an unknown option.
+    parser._negative_number_matcher = re.compile(r"^-\.?\d")
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--world", type=Path, help="Gazebo SDF .world file (its boxes and cylinders)")
     source.add_argument(
