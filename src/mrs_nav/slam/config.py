@@ -35,9 +35,6 @@ class SlamConfig:
         search_linear, search_angular: half-widths of the scan matcher's correlative search window around
             the odometry prediction (m, rad).
         sigma: standard deviation of the likelihood field (m) used to score a scan against the map.
-        loop_closure: detect revisits and correct the trajectory with a pose graph.
-        loop_search_radius: revisit candidates are earlier poses within this distance (m).
-        loop_min_score: fraction of scan points that must land on the map for a loop constraint.
     """
 
     delta: float = 0.05
@@ -58,9 +55,6 @@ class SlamConfig:
     search_linear: float = 0.3
     search_angular: float = 0.5
     sigma: float = 0.05
-    loop_closure: bool = True
-    loop_search_radius: float = 4.0
-    loop_min_score: float = 0.6
 
     def __post_init__(self) -> None:
         for field in dataclasses.fields(self):
@@ -72,7 +66,7 @@ class SlamConfig:
             if getattr(self, name) <= 0.0:
                 raise InvalidInputError(f"SLAM parameter {name} must be > 0, got {getattr(self, name)}")
         non_negative = ("maxRange", "linearUpdate", "angularUpdate", "search_linear", "search_angular")
-        for name in non_negative + ("loop_search_radius",):
+        for name in non_negative:
             if getattr(self, name) < 0.0:
                 raise InvalidInputError(f"SLAM parameter {name} must be >= 0, got {getattr(self, name)}")
         if self.delta > 1.0:
@@ -81,8 +75,6 @@ class SlamConfig:
             raise InvalidInputError(
                 f"SLAM map extent is empty: x {self.xmin}..{self.xmax}, y {self.ymin}..{self.ymax}"
             )
-        if not 0.0 < self.loop_min_score <= 1.0:
-            raise InvalidInputError(f"SLAM parameter loop_min_score must be in (0, 1], got {self.loop_min_score}")
 
     @classmethod
     def from_mapping(cls, values: dict[str, Any]) -> SlamConfig:
