@@ -1,4 +1,4 @@
-"""SLAM-lite: occupancy grid mapping, scan matching and loop closure (a gmapping substitute)."""
+"""SLAM-lite: occupancy grid mapping and scan-to-map matching (a gmapping substitute)."""
 
 from mrs_nav.slam.config import SlamConfig
 from mrs_nav.slam.grid import LogOddsGrid

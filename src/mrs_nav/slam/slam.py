@@ -1,4 +1,4 @@
-"""SLAM-lite: a gmapping substitute with one pose hypothesis, scan-to-map matching and loop closure.
+"""SLAM-lite: a gmapping substitute with one pose hypothesis and scan-to-map matching.
 
 Each processed scan is predicted from odometry, aligned to the map built so far (:mod:`mrs_nav.slam.matcher`)
 and added to it (:mod:`mrs_nav.slam.grid`). Scans are processed only when the robot has moved or turned enough
