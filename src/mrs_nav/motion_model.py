@@ -13,6 +13,7 @@ Backward motion is decomposed with a negative translation so that ``rot1`` stays
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -72,7 +73,7 @@ def noisy_odometry(truth: Sequence[Pose2D], noise: OdometryNoise, rng: np.random
     if not truth:
         return []
     odom = [truth[0]]
-    for prev, cur in zip(truth[:-1], truth[1:], strict=True):
+    for prev, cur in itertools.pairwise(truth):
         rot1, trans, rot2 = decompose(prev, cur)
         sd_rot1 = math.sqrt(noise.a1 * rot1**2 + noise.a2 * trans**2)
         sd_trans = math.sqrt(noise.a3 * trans**2 + noise.a4 * (rot1**2 + rot2**2))

@@ -12,7 +12,7 @@ from types import TracebackType
 from typing import Any
 
 from rosbags.rosbag1 import Reader, Writer
-from rosbags.typesys import Stores, get_typestore, get_types_from_msg
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from mrs_nav.errors import BagError
 
@@ -88,6 +88,8 @@ def read_messages(path: Path, topics: Iterable[str], *, required: Iterable[str] 
             present = ", ".join(sorted(reader.topics)) or "none"
             raise BagError(f"bag {path} has no {', '.join(missing)} topic (topics: {present})")
         connections = [c for c in reader.connections if c.topic in wanted]
+        if not connections:  # rosbags reads every connection when given none
+            return
         try:
             for conn, stamp, raw in reader.messages(connections=connections):
                 yield conn.topic, stamp, store.deserialize_ros1(raw, conn.msgtype)

@@ -23,7 +23,7 @@ def stamp_of(message: Any) -> float:
 
 def _time(seconds: float) -> Any:
     sec = int(np.floor(seconds))
-    return typestore().types["builtin_interfaces/msg/Time"](sec=sec, nanosec=int(round((seconds - sec) * 1e9)) % 10**9)
+    return typestore().types["builtin_interfaces/msg/Time"](sec=sec, nanosec=round((seconds - sec) * 1e9) % 10**9)
 
 
 def _header(seconds: float, frame: str, seq: int = 0) -> Any:
@@ -62,7 +62,7 @@ def scan_from_message(message: Any) -> LaserScanData:
     inc = float(message.angle_increment)
     if inc == 0.0:
         raise InvalidInputError("laser scan has angle_increment 0")
-    expected = int(round((float(message.angle_max) - float(message.angle_min)) / inc)) + 1
+    expected = round((float(message.angle_max) - float(message.angle_min)) / inc) + 1
     if ranges.size != expected:
         raise InvalidInputError(
             f"laser scan has {ranges.size} ranges but its angles "

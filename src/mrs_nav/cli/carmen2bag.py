@@ -7,6 +7,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from tqdm import tqdm
+
 from mrs_nav.bag.from_carmen import carmen_to_bag
 from mrs_nav.cli.common import parse_floats, print_json
 from mrs_nav.motion_model import DEFAULT_ALPHAS, OdometryNoise
@@ -48,8 +50,6 @@ def run(args: argparse.Namespace) -> int:
     progress = None
     bar: Any = None
     if sys.stderr.isatty():
-        from tqdm import tqdm
-
         bar = tqdm(desc="carmen2bag", unit="scan")
         progress = bar.update
     try:

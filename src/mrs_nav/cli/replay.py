@@ -7,6 +7,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from tqdm import tqdm
+
 from mrs_nav.cli.common import fail, print_json
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.replay.slam_replay import replay_slam, write_outputs
@@ -57,8 +59,6 @@ def run(args: argparse.Namespace) -> int:
     bar: Any = None
     progress = None
     if sys.stderr.isatty():
-        from tqdm import tqdm
-
         bar = tqdm(desc="replay --slam", unit="scan")
         progress = bar.update
     try:

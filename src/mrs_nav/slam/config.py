@@ -72,9 +72,7 @@ class SlamConfig:
         if self.delta > 1.0:
             raise InvalidInputError(f"SLAM parameter delta (map resolution) must be <= 1 m, got {self.delta}")
         if self.xmax - self.xmin < self.delta or self.ymax - self.ymin < self.delta:
-            raise InvalidInputError(
-                f"SLAM map extent is empty: x {self.xmin}..{self.xmax}, y {self.ymin}..{self.ymax}"
-            )
+            raise InvalidInputError(f"SLAM map extent is empty: x {self.xmin}..{self.xmax}, y {self.ymin}..{self.ymax}")
 
     @classmethod
     def from_mapping(cls, values: dict[str, Any]) -> SlamConfig:

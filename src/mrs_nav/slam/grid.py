@@ -5,6 +5,9 @@ Each processed scan adds ``loccupied`` to the log-odds of the cells holding beam
 ``[-lmax, lmax]``. A cell crossed by several beams of one scan is updated once, and a cell holding an end
 point is never cleared by the same scan, so the update does not depend on the angular density of the laser.
 
+Like gmapping's point accumulator, each cell also keeps the mean of the end points that fell in it, so the scan
+matcher can align to where obstacles were seen rather than to cell centres (sub-cell accuracy).
+
 Cells are indexed ``[row, col] = [iy, ix]``; cell ``(ix, iy)`` covers
 ``[origin_x + ix * resolution, origin_x + (ix + 1) * resolution)`` and likewise in y.
 """
@@ -53,6 +56,9 @@ class LogOddsGrid:
         width = math.ceil((xmax - self.origin_x) / resolution)
         height = math.ceil((ymax - self.origin_y) / resolution)
         self.logodds = np.zeros((height, width), dtype=np.float32)
+        # Sum of end point coordinates (m) and end point count per cell, for the mean hit point.
+        self.hit_sum = np.zeros((2, height, width), dtype=np.float64)
+        self.hit_count = np.zeros((height, width), dtype=np.float64)
 
     @property
     def width(self) -> int:
@@ -71,6 +77,8 @@ class LogOddsGrid:
     def clear(self) -> None:
         """Forget everything observed (the extent stays)."""
         self.logodds[:] = 0.0
+        self.hit_sum[:] = 0.0
+        self.hit_count[:] = 0.0
 
     def ensure_contains(self, xmin: float, ymin: float, xmax: float, ymax: float) -> None:
         """Grow the grid (if allowed) so that the box lies inside, with a margin to avoid growing every scan."""
@@ -87,6 +95,8 @@ class LogOddsGrid:
         pad = [(bottom + margin if bottom else 0, top + margin if top else 0)]
         pad.append((left + margin if left else 0, right + margin if right else 0))
         self.logodds = np.pad(self.logodds, pad)
+        self.hit_sum = np.pad(self.hit_sum, [(0, 0), *pad])
+        self.hit_count = np.pad(self.hit_count, pad)
         self.origin_x -= pad[1][0] * res
         self.origin_y -= pad[0][0] * res
 
@@ -119,13 +129,16 @@ class LogOddsGrid:
         t = k * step
         free_ix, free_iy = self.cell_of(sensor.x + t * cos[beam], sensor.y + t * sin[beam])
         occ_ix, occ_iy = self.cell_of(ends_x[:n_hit], ends_y[:n_hit])
+        keep = (occ_ix >= 0) & (occ_ix < self.width) & (occ_iy >= 0) & (occ_iy < self.height)
+        occ_ix, occ_iy = occ_ix[keep], occ_iy[keep]
+        np.add.at(self.hit_sum[0], (occ_iy, occ_ix), ends_x[:n_hit][keep])
+        np.add.at(self.hit_sum[1], (occ_iy, occ_ix), ends_y[:n_hit][keep])
+        np.add.at(self.hit_count, (occ_iy, occ_ix), 1.0)
         self._apply(free_ix, free_iy, occ_ix, occ_iy)
 
     def _apply(self, free_ix: IntArray, free_iy: IntArray, occ_ix: IntArray, occ_iy: IntArray) -> None:
         keep = (free_ix >= 0) & (free_ix < self.width) & (free_iy >= 0) & (free_iy < self.height)
         free_ix, free_iy = free_ix[keep], free_iy[keep]
-        keep = (occ_ix >= 0) & (occ_ix < self.width) & (occ_iy >= 0) & (occ_iy < self.height)
-        occ_ix, occ_iy = occ_ix[keep], occ_iy[keep]
         all_x = np.concatenate([free_ix, occ_ix])
         all_y = np.concatenate([free_iy, occ_iy])
         if all_x.size == 0:
@@ -142,6 +155,16 @@ class LogOddsGrid:
         window[free] -= self.lfree
         window[occ] += self.loccupied
         np.clip(window, -self.lmax, self.lmax, out=window)
+
+    def mean_hits(self, iy: IntArray, ix: IntArray) -> tuple[FloatArray, FloatArray]:
+        """Mean end point (m) of cells ``(iy, ix)``; the cell centre where nothing was hit."""
+        count = self.hit_count[iy, ix]
+        centre_x = self.origin_x + (ix + 0.5) * self.resolution
+        centre_y = self.origin_y + (iy + 0.5) * self.resolution
+        safe = np.maximum(count, 1.0)
+        x = np.where(count > 0, self.hit_sum[0, iy, ix] / safe, centre_x)
+        y = np.where(count > 0, self.hit_sum[1, iy, ix] / safe, centre_y)
+        return x, y
 
     def occupied(self) -> npt.NDArray[np.bool_]:
         """Cells that are more likely occupied than free (what the scan matcher aligns to)."""

@@ -8,8 +8,9 @@ the scan can reach, and into a likelihood field ``L = exp(-D^2 / (2 sigma^2))``.
    ``COARSE`` x ``COARSE`` cells, an upper bound of the fine score anywhere in that block. A weak quadratic
    penalty on the distance from the odometry prediction breaks ties along corridors.
 2. Fine search: the best coarse blocks are searched cell by cell with a finer angular step.
-3. Refinement: Gauss-Newton (Levenberg-damped, Huber-weighted) on the bilinearly interpolated ``D``, minimising
-   ``sum_i D(R(theta) p_i + t)^2`` for sub-cell, sub-degree accuracy (as in Hector SLAM's map gradient step).
+3. Refinement: point-to-point ICP (Gauss-Newton, Huber-weighted) where each scan point is paired with the mean
+   end point of its nearest occupied cell (found through the distance transform's nearest-cell indices), for
+   sub-cell, sub-degree accuracy; pairs farther than 4 cells apart are ignored.
 """
 
 from __future__ import annotations
@@ -59,11 +60,25 @@ class DistanceField:
         self.empty = not bool(occ.any())
         if self.empty:
             dist = np.full((1, 1), max_distance, dtype=np.float64)
+            near = np.zeros((2, 1, 1), dtype=np.int64)
         else:
-            dist = np.minimum(ndimage.distance_transform_edt(~occ) * res, max_distance)
+            edt, near = ndimage.distance_transform_edt(~occ, return_indices=True)
+            dist = np.minimum(edt * res, max_distance)
         self.distance: FloatArray = np.pad(dist, pad, constant_values=max_distance)
         self.origin_x = grid.origin_x + (x0 - pad) * res
         self.origin_y = grid.origin_y + (y0 - pad) * res
+        # Grid indices of the nearest occupied cell, per window cell (-1 in the padding).
+        self.grid = grid
+        self.near_iy = np.pad(near[0] + y0, pad, constant_values=-1)
+        self.near_ix = np.pad(near[1] + x0, pad, constant_values=-1)
+
+    def nearest_hits(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Mean hit point (m) of the occupied cell nearest to each point; NaN outside the window."""
+        ix, iy = self.cells(x, y)
+        niy, nix = self.near_iy[iy, ix], self.near_ix[iy, ix]
+        inside = niy >= 0
+        hx, hy = self.grid.mean_hits(np.maximum(niy, 0), np.maximum(nix, 0))
+        return np.where(inside, hx, np.nan), np.where(inside, hy, np.nan)
 
     def cells(self, x: FloatArray, y: FloatArray) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
         """Cell indices of points, clipped into the padded window."""
@@ -95,7 +110,7 @@ def thin_points(points: FloatArray, spacing: float) -> FloatArray:
         return points
     keys = np.floor(points / spacing).astype(np.int64)
     _, first = np.unique(keys[:, 0] * 1_000_003 + keys[:, 1], return_index=True)
-    return points[np.sort(first)]
+    return np.asarray(points[np.sort(first)], dtype=np.float64)
 
 
 class ScanMatcher:
@@ -121,7 +136,7 @@ class ScanMatcher:
         n_ang = max(1, math.ceil(self.search_angular / COARSE_ANGLE))
         coarse_offsets = np.arange(-n_lin, n_lin + 1) * COARSE
         coarse_angles = np.arange(-n_ang, n_ang + 1) * COARSE_ANGLE
-        scores = self._scores(field, pooled, points, prior, coarse_angles, coarse_offsets)
+        scores = self._scores(field, pooled, points, prior, angles=coarse_angles, offsets=coarse_offsets)
         best: tuple[float, float, int, int] = (-math.inf, 0.0, 0, 0)
         for flat in np.argsort(scores, axis=None)[::-1][:TOP_CANDIDATES]:
             a, ox, oy = np.unravel_index(flat, scores.shape)
@@ -133,8 +148,8 @@ class ScanMatcher:
                 likelihood,
                 points,
                 prior,
-                fine_angles,
-                fine_offsets,
+                angles=fine_angles,
+                offsets=fine_offsets,
                 base=(int(coarse_offsets[ox]), int(coarse_offsets[oy])),
             )
             fa, fx, fy = np.unravel_index(int(np.argmax(fine)), fine.shape)
@@ -156,6 +171,7 @@ class ScanMatcher:
         table: FloatArray,
         points: FloatArray,
         prior: Pose2D,
+        *,
         angles: FloatArray,
         offsets: npt.NDArray[np.int64],
         base: tuple[int, int] = (0, 0),
@@ -179,33 +195,39 @@ class ScanMatcher:
         penalty = PRIOR_WEIGHT * (oa[:, None, None] ** 2 + ox[None, :, None] ** 2 + oy[None, None, :] ** 2)
         return np.asarray(score - penalty, dtype=np.float64)
 
-    def refine(self, field: DistanceField, points: FloatArray, start: Pose2D, iterations: int = 12) -> Pose2D:
-        """Gauss-Newton on ``sum D^2`` from ``start``; points farther than 4 cells from the map are ignored."""
+    def refine(self, field: DistanceField, points: FloatArray, start: Pose2D, iterations: int = 10) -> Pose2D:
+        """Point-to-point ICP from ``start`` against the mean hit points of the nearest occupied cells."""
         res = field.resolution
         x, y, yaw = start.x, start.y, start.yaw
         cutoff = 4.0 * res
-        huber = 1.0 * res
+        huber = 0.5 * res
         for _ in range(iterations):
             c, s = math.cos(yaw), math.sin(yaw)
             wx = x + c * points[:, 0] - s * points[:, 1]
             wy = y + s * points[:, 0] + c * points[:, 1]
-            d, gx, gy = field.interpolate(wx, wy)
-            use = d < cutoff
+            mx, my = field.nearest_hits(wx, wy)
+            rx, ry = wx - mx, wy - my
+            dist = np.hypot(rx, ry)
+            use = np.isfinite(dist) & (dist < cutoff)
             if int(use.sum()) < 3:
                 break
-            d, gx, gy = d[use], gx[use], gy[use]
+            rx, ry, dist = rx[use], ry[use], dist[use]
             px, py = points[use, 0], points[use, 1]
-            weight = np.where(d <= huber, 1.0, huber / np.maximum(d, 1e-12))
-            jt = gx * (-s * px - c * py) + gy * (c * px - s * py)
-            jac = np.stack([gx, gy, jt], axis=1)
-            hess = (jac * weight[:, None]).T @ jac
-            grad = (jac * weight[:, None]).T @ d
-            hess += np.diag(np.diag(hess) * 1e-3 + 1e-9)
-            step = -np.linalg.solve(hess, grad)
-            # Refinement stays inside the basin the search found: never more than a cell or a degree per step.
-            scale = min(1.0, res / max(abs(step[0]), abs(step[1]), 1e-12), math.radians(1.0) / max(abs(step[2]), 1e-12))
-            x, y, yaw = x + scale * step[0], y + scale * step[1], yaw + scale * step[2]
-            if abs(step[0]) + abs(step[1]) < 1e-4 and abs(step[2]) < 1e-4:
+            weight = np.where(dist <= huber, 1.0, huber / np.maximum(dist, 1e-12))
+            # residual r = R p + t - m; dr/dtheta = (-s px - c py, c px - s py)
+            dtx, dty = -s * px - c * py, c * px - s * py
+            n = rx.size
+            jac = np.zeros((2 * n, 3))
+            jac[:n, 0] = 1.0
+            jac[n:, 1] = 1.0
+            jac[:n, 2] = dtx
+            jac[n:, 2] = dty
+            r = np.concatenate([rx, ry])
+            w = np.concatenate([weight, weight])
+            hess = (jac * w[:, None]).T @ jac + np.diag([1e-9, 1e-9, 1e-9])
+            step = -np.linalg.solve(hess, (jac * w[:, None]).T @ r)
+            x, y, yaw = x + step[0], y + step[1], yaw + step[2]
+            if abs(step[0]) + abs(step[1]) < 1e-5 and abs(step[2]) < 1e-5:
                 break
         return Pose2D(x, y, wrap_angle(yaw))
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mrs_nav.errors import InvalidInputError
-from mrs_nav.geometry import Pose2D, wrap_angles
+from mrs_nav.geometry import FloatArray, Pose2D, wrap_angles
 
 
 @dataclass(frozen=True)
@@ -30,13 +30,13 @@ class TrajectoryErrors:
     rpe_rot_mean_deg: float
 
 
-def align_se2(estimate: np.ndarray, truth: np.ndarray) -> tuple[float, np.ndarray]:
+def align_se2(estimate: FloatArray, truth: FloatArray) -> tuple[float, FloatArray]:
     """Rotation angle (rad) and translation (2,) that best map ``estimate`` positions onto ``truth`` (N x 2)."""
     mu_e, mu_t = estimate.mean(axis=0), truth.mean(axis=0)
     e, t = estimate - mu_e, truth - mu_t
     angle = math.atan2(float(np.sum(e[:, 0] * t[:, 1] - e[:, 1] * t[:, 0])), float(np.sum(e * t)))
     rot = np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
-    return angle, mu_t - rot @ mu_e
+    return angle, np.asarray(mu_t - rot @ mu_e, dtype=np.float64)
 
 
 def trajectory_errors(estimate: Sequence[Pose2D], truth: Sequence[Pose2D]) -> TrajectoryErrors:

@@ -100,11 +100,16 @@ class Slam:
         c, s = math.cos(sensor_prior.yaw), math.sin(sensor_prior.yaw)
         wx = sensor_prior.x + c * thinned[:, 0] - s * thinned[:, 1]
         wy = sensor_prior.y + s * thinned[:, 0] + c * thinned[:, 1]
+        # The window covers the predicted scan plus the linear search; points that the angular search swings
+        # farther out fall in the padding, where they score nothing, which is what a wrong heading deserves.
         reach = self.config.search_linear + FIELD_MAX_DISTANCE
-        # Points swing by up to range * angle under the angular search; cover that too.
-        swing = float(np.max(np.hypot(thinned[:, 0], thinned[:, 1]))) * min(self.config.search_angular, 1.0)
-        margin = reach + swing
-        bounds = (float(wx.min()) - margin, float(wy.min()) - margin, float(wx.max()) + margin, float(wy.max()) + margin)
+        margin = reach
+        bounds = (
+            float(wx.min()) - margin,
+            float(wy.min()) - margin,
+            float(wx.max()) + margin,
+            float(wy.max()) + margin,
+        )
         pad = math.ceil(reach / self.config.delta) + 2
         field = DistanceField(self.grid, bounds, FIELD_MAX_DISTANCE, pad)
         return self.matcher.match(field, thinned, sensor_prior)

@@ -57,7 +57,8 @@ def test_grid_grows_when_the_scan_leaves_the_extent():
     grid.integrate(Pose2D(3.0, -4.0, 0.5), split_beams(one_beam(2.0), 8.0))
     end = (3.0 + 2.0 * math.cos(0.5), -4.0 + 2.0 * math.sin(0.5))
     assert cell_value(grid, *end) > 0.0
-    assert grid.origin_x <= 1.0 and grid.origin_y <= -4.0
+    assert grid.origin_x <= 1.0
+    assert grid.origin_y <= -4.0
 
 
 def test_fixed_extent_is_honoured():

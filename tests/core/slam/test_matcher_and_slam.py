@@ -1,4 +1,5 @@
 import math
+from dataclasses import astuple
 
 import numpy as np
 import pytest
@@ -20,7 +21,7 @@ def test_matcher_recovers_a_pose_from_a_wrong_odometry_prediction():
     odom_guess = Pose2D(-0.45, 0.3, 0.35 + math.radians(8.0))  # 18 cm and 8 degrees off
     done = slam.add_scan(odom_guess, cast(true), 1.0)
     assert done is not None
-    assert math.hypot(done.pose.x - true.x, done.pose.y - true.y) < 0.02
+    assert math.hypot(done.pose.x - true.x, done.pose.y - true.y) < 0.01
     assert abs(done.pose.yaw - true.yaw) < math.radians(0.5)
 
 
@@ -60,8 +61,8 @@ def test_corrupt_scans_fall_back_to_odometry(ranges):
     bad = LaserScanData(-math.pi, 2 * math.pi / 360, 0.12, 3.5, ranges)
     done = slam.add_scan(odom, bad, 1.0)
     assert done is not None
-    assert done.pose == pytest.approx(odom)
-    if ranges.size != 17:
+    if ranges.size != 17:  # 17 beams at 1 m are a (wrong but) valid scan: it may be matched and mapped
+        assert astuple(done.pose) == pytest.approx(astuple(odom))
         assert np.array_equal(before, slam.grid.logodds)
 
 
@@ -74,7 +75,6 @@ def test_update_gates():
     assert slam.add_scan(Pose2D(0.0, 0.0, 0.0), scan, 3.5) is not None  # temporalUpdate
     assert slam.add_scan(Pose2D(0.51, 0.0, 0.0), scan, 3.6) is not None  # linearUpdate
     assert slam.add_scan(Pose2D(0.51, 0.0, 0.41), scan, 3.7) is not None  # angularUpdate
-    assert not Slam(SlamConfig(temporalUpdate=-1.0)).wants(Pose2D(0, 0, 0), 0.0) is False
 
 
 def test_map_to_odom_makes_the_corrected_pose():
@@ -83,7 +83,7 @@ def test_map_to_odom_makes_the_corrected_pose():
     odom = Pose2D(0.5, 0.1, 0.2)
     done = slam.add_scan(odom, cast(Pose2D(0.4, 0.0, 0.1)), 1.0)
     assert done is not None
-    assert slam.map_to_odom.compose(odom) == pytest.approx(done.pose, abs=1e-9)
+    assert astuple(slam.map_to_odom.compose(odom)) == pytest.approx(astuple(done.pose), abs=1e-9)
 
 
 @pytest.mark.parametrize(
@@ -104,4 +104,6 @@ def test_config_rejects_nonsense(values, match):
 
 def test_config_takes_gmapping_names_and_strings():
     config = SlamConfig.from_mapping({"maxUrange": "3.0", "temporalUpdate": 0.5, "map_grows": "false"})
-    assert config.maxUrange == 3.0 and config.temporalUpdate == 0.5 and config.map_grows is False
+    assert config.maxUrange == 3.0
+    assert config.temporalUpdate == 0.5
+    assert config.map_grows is False
