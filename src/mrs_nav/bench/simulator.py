@@ -26,6 +26,7 @@ import time
 import xmlrpc.client
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 from mrs_nav.bench.results import markdown_table
 from mrs_nav.cli.common import parse_floats
@@ -148,8 +149,8 @@ def _wait_for_master(uri: str, timeout: float = 30.0) -> None:
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         try:
-            code, _, _ = xmlrpc.client.ServerProxy(uri).getPid("/mrs_nav_bench")
-            if code == 1:
+            reply: Any = xmlrpc.client.ServerProxy(uri).getPid("/mrs_nav_bench")
+            if reply[0] == 1:
                 return
         except OSError:
             pass
