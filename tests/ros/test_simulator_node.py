@@ -72,7 +72,8 @@ def test_scan_odom_tf_and_clock_arrive_at_their_rates_in_sim_time(simulation: An
         ),
     }
     try:
-        t0 = rospy.get_time() + 0.5  # after every subscription is connected
+        wait_for(lambda: all(rec.stamps for rec in recorders.values()), 60.0, "every topic")
+        t0 = max(rec.stamps[0] for rec in recorders.values())  # every subscription is connected from here
         wait_for(lambda: rospy.get_time() > t0 + 6.0, 120.0, "6 s of sim time")
         t1 = t0 + 5.0
         expected = {"/clock": 100.0, "/scan": 5.0, "/odom": 50.0, "/tf": 50.0}
