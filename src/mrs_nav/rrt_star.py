@@ -1,0 +1,253 @@
+"""RRT* with circular-arc edges (assignment 3d): ExtendRRT* of Karaman & Frazzoli (arXiv:1005.0416, Alg. 4).
+
+Each iteration:
+
+1. sample a free position (the goal with probability ``goal_bias`` until a path exists; afterwards, with
+   ``informed``, uniformly inside the ellipse of points that could shorten the best path: foci start and goal,
+   major axis the best length, since no path through ``x`` is shorter than ``|x - start| + |x - goal|``);
+2. steer from the nearest node towards it by at most ``step`` metres to ``x_new``;
+3. choose as parent the near node (within ``r_n = min(step, gamma sqrt(log n / n))``) whose arc to ``x_new`` is
+   feasible (forward, ``|alpha| <= max_alpha``, radius >= ``min_turning_radius``), collision-free and gives
+   the least cost (arc length from the start); ``x_new`` takes that arc's end yaw;
+4. rewire: every near node that becomes cheaper through ``x_new`` gets ``x_new`` as parent and the yaw of the
+   arc from ``x_new``. Its yaw changes, so the arcs to its children change too: the whole subtree is
+   re-derived level by level (each child keeps its position, takes the end yaw of the new arc from its
+   parent) and the rewire is kept only when every re-derived arc is feasible and collision-free and no node of
+   the subtree gets more expensive. Every edge of the tree thus stays a valid arc, and costs never grow.
+
+``gamma = 2 sqrt(1 + 1/2) sqrt(A_free / pi)`` (Karaman & Frazzoli's bound for d = 2, A_free the free area of
+the grid) unless given. The search runs until the iteration or time budget ends (``stop_at_first`` ends it at
+the first path) and returns the best path found; the tree's costs are monotone, so the best path's length never
+grows with more iterations. The path ends exactly on the goal position (a goal node).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from mrs_nav import arcs
+from mrs_nav.errors import InvalidInputError
+from mrs_nav.geometry import FloatArray, Pose2D
+from mrs_nav.occupancy_grid import IntArray, OccupancyGrid
+from mrs_nav.planning import PlanResult, path_length
+from mrs_nav.rrt import check_budget, check_query, failed, sample_random_position
+from mrs_nav.rrt_tree import ArcTree, Search
+
+# Costs closer than this (metres) count as equal.
+_EPS = 1e-9
+
+
+@dataclass(frozen=True)
+class RRTStarConfig:
+    """Parameters of :func:`rrt_star` (counts, seconds, metres, radians); ``None`` budget = no limit on it."""
+
+    iterations: int | None = None
+    time_budget: float | None = 0.5
+    goal_bias: float = 0.1
+    step: float = 0.6
+    max_alpha: float = math.pi / 2
+    min_turning_radius: float = 0.0
+    informed: bool = True
+    gamma: float | None = None
+    stop_at_first: bool = False
+
+    def __post_init__(self) -> None:
+        check_budget(self.iterations, self.time_budget)
+        if not 0.0 <= self.goal_bias <= 1.0:
+            raise InvalidInputError(f"goal_bias must lie in [0, 1], got {self.goal_bias}")
+        if not (math.isfinite(self.step) and self.step > 0.0):
+            raise InvalidInputError(f"step must be positive, got {self.step}")
+        if not 0.0 < self.max_alpha <= math.pi / 2:
+            raise InvalidInputError(f"max_alpha must lie in (0, pi/2], got {self.max_alpha}")
+        if self.min_turning_radius < 0.0 or (self.gamma is not None and self.gamma <= 0.0):
+            raise InvalidInputError("min_turning_radius must be >= 0 and gamma > 0")
+
+
+def default_gamma(grid: OccupancyGrid) -> float:
+    """Karaman & Frazzoli's ``gamma_RRT* > 2 (1 + 1/d)^(1/d) (A_free / zeta_d)^(1/d)`` for d = 2, in metres."""
+    return 2.0 * math.sqrt(1.5) * math.sqrt(max(grid.free_area(), grid.resolution**2) / math.pi)
+
+
+def sample_informed(
+    grid: OccupancyGrid, rng: np.random.Generator, start: FloatArray, goal: FloatArray, best: float
+) -> FloatArray:
+    """A free position uniform in the ellipse ``|x - start| + |x - goal| <= best`` (falls back to the map)."""
+    c_min = float(np.hypot(*(goal - start)))
+    a = best / 2.0
+    b = math.sqrt(max(best * best - c_min * c_min, 0.0)) / 2.0
+    angle = math.atan2(goal[1] - start[1], goal[0] - start[0])
+    rot = np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
+    centre = (start + goal) / 2.0
+    for _ in range(64):
+        r = np.sqrt(rng.random(32))
+        t = rng.random(32) * 2.0 * math.pi
+        points = (np.stack([a * r * np.cos(t), b * r * np.sin(t)], axis=1) @ rot.T) + centre
+        free = np.flatnonzero(grid.is_free(points))
+        if len(free):
+            out: FloatArray = points[free[0]]
+            return out
+    return sample_random_position(grid, rng)
+
+
+class _Planner:
+    """One RRT* search; the state shared by the steps of an iteration."""
+
+    def __init__(self, start: Pose2D, goal: FloatArray, grid: OccupancyGrid, config: RRTStarConfig) -> None:
+        self.start = start
+        self.goal = goal
+        self.grid = grid
+        self.config = config
+        self.tree = ArcTree(start, capacity=4096)
+        self.gamma = config.gamma if config.gamma is not None else default_gamma(grid)
+        self.goal_node = -1
+
+    def arcs_ok(self, batch: arcs.Arcs) -> FloatArray:
+        """Feasible and collision-free mask of a batch."""
+        return arcs.checked(batch, self.grid, self.config.max_alpha, self.config.min_turning_radius)
+
+    def extend(self, target: FloatArray) -> int:
+        """Steps 2-4 towards ``target``; returns the new node's id or -1."""
+        tree = self.tree
+        ids, dist = tree.nearest(target, 1)
+        nearest, d = int(ids[0]), float(dist[0])
+        if d <= _EPS:
+            return -1
+        x_new = target if d <= self.config.step else tree.position[nearest] + (target - tree.position[nearest]) * (
+            self.config.step / d
+        )
+        if not self.grid.lookup(self.grid.conservative_free_mask, x_new)[0]:
+            return -1
+        n = len(tree)
+        radius = min(self.config.step, self.gamma * math.sqrt(math.log(n + 1) / (n + 1)))
+        near = tree.within(x_new, radius)
+        if nearest not in near:
+            near = np.append(near, nearest)
+        # Step 3: the cheapest valid parent.
+        into = arcs.connect(tree.position[near], tree.yaw[near], x_new)
+        cost = tree.cost[near] + into.length
+        ok = self.arcs_ok(into)
+        if not ok.any():
+            return -1
+        best = int(np.flatnonzero(ok)[np.argmin(cost[ok])])
+        parent = int(near[best])
+        new = tree.add(x_new, float(into.end_yaw[best]), parent, float(cost[best]))
+        if self.goal_node < 0 and float(np.hypot(*(x_new - self.goal))) <= _EPS:
+            self.goal_node = new
+        # Step 4: rewire the other near nodes through x_new.
+        others = near[near != parent]
+        if len(others):
+            out = arcs.connect(x_new, tree.yaw[new], tree.position[others])
+            new_cost = tree.cost[new] + out.length
+            better = new_cost < tree.cost[others] - _EPS
+            if better.any():
+                idx = np.flatnonzero(better)
+                sub = arcs.take(out, idx)
+                valid = self.arcs_ok(sub)
+                for k in np.flatnonzero(valid):
+                    j = int(others[idx[k]])
+                    if new_cost[idx[k]] < tree.cost[j] - _EPS:
+                        self.rewire(j, new, float(sub.end_yaw[k]), float(new_cost[idx[k]]))
+        return new
+
+    def rewire(self, node: int, new_parent: int, yaw: float, cost: float) -> bool:
+        """Move ``node`` under ``new_parent`` with ``yaw`` and ``cost`` if its whole subtree stays valid and no
+        node of it gets more expensive (see the module docstring)."""
+        tree = self.tree
+        levels = tree.subtree(node)
+        changed: list[IntArray] = []
+        yaws: list[FloatArray] = []
+        costs: list[FloatArray] = []
+        parent_yaw = {node: yaw}
+        parent_cost = {node: cost}
+        for level in levels:
+            ids = np.asarray(level, dtype=np.intp)
+            par = tree.parent[ids]
+            py = np.array([parent_yaw[int(p)] for p in par])
+            pc = np.array([parent_cost[int(p)] for p in par])
+            batch = arcs.connect(tree.position[par], py, tree.position[ids])
+            level_cost = pc + batch.length
+            if np.any(level_cost > tree.cost[ids] + _EPS) or not self.arcs_ok(batch).all():
+                return False
+            changed.append(ids)
+            yaws.append(batch.end_yaw)
+            costs.append(level_cost)
+            parent_yaw.update(zip(level, batch.end_yaw.tolist(), strict=True))
+            parent_cost.update(zip(level, level_cost.tolist(), strict=True))
+        tree.reparent(node, new_parent)
+        tree.yaw[node] = yaw
+        tree.cost[node] = cost
+        for ids, y, c in zip(changed, yaws, costs, strict=True):
+            tree.yaw[ids] = y
+            tree.cost[ids] = c
+        return True
+
+    def try_goal(self, node: int) -> None:
+        """Connect ``node`` straight to the goal when it is within one step: finds the first path sooner."""
+        tree = self.tree
+        if self.goal_node >= 0 or float(np.hypot(*(tree.position[node] - self.goal))) > self.config.step:
+            return
+        arc = arcs.connect(tree.position[node], tree.yaw[node], self.goal)
+        if self.arcs_ok(arc)[0]:
+            self.goal_node = tree.add(self.goal, float(arc.end_yaw[0]), node, float(tree.cost[node] + arc.length[0]))
+
+
+def grow_rrt_star(
+    start: Pose2D, goal: FloatArray, grid: OccupancyGrid, config: RRTStarConfig, rng: np.random.Generator
+) -> Search:
+    """Run RRT* from ``start`` to ``goal`` (x, y) on ``grid`` (inflated); the result, tree and improvements."""
+    t0 = time.perf_counter()
+    goal = np.asarray(goal, dtype=np.float64)[:2]
+    check_query(grid, start, goal)
+    planner = _Planner(start, goal, grid, config)
+    tree = planner.tree
+    deadline = math.inf if config.time_budget is None else t0 + config.time_budget
+    limit = config.iterations if config.iterations is not None else math.inf
+    best_cost = math.inf
+    best_path: FloatArray | None = None
+    history: list[tuple[int, float, float]] = []
+    first_s: float | None = None
+    iteration = 0
+    while iteration < limit and time.perf_counter() < deadline:
+        iteration += 1
+        if planner.goal_node < 0 and rng.random() < config.goal_bias:
+            target = goal.copy()
+        elif config.informed and best_path is not None:
+            target = sample_informed(grid, rng, start.position, goal, best_cost)
+        else:
+            target = sample_random_position(grid, rng)
+        new = planner.extend(target)
+        if new < 0:
+            continue
+        planner.try_goal(new)
+        g = planner.goal_node
+        if g >= 0 and tree.cost[g] < best_cost - _EPS:
+            best_cost = float(tree.cost[g])
+            best_path = tree.path_poses(tree.branch(g), grid.resolution)
+            now = time.perf_counter() - t0
+            first_s = now if first_s is None else first_s
+            history.append((iteration, now, path_length(best_path)))
+            if config.stop_at_first:
+                break
+    elapsed = time.perf_counter() - t0
+    if best_path is None:
+        reason = "iteration budget used up" if iteration >= limit else "time budget used up"
+        return Search(failed(start, elapsed, iteration, len(tree), f"no path found: {reason}"), tree, ())
+    result = PlanResult(
+        True, best_path, path_length(best_path), elapsed, first_s, iteration, len(tree), "best path within budget"
+    )
+    return Search(result, tree, tuple(history))
+
+
+def rrt_star(
+    start: Pose2D,
+    goal: FloatArray,
+    grid: OccupancyGrid,
+    config: RRTStarConfig | None = None,
+    rng: np.random.Generator | None = None,
+) -> PlanResult:
+    """RRT* from ``start`` to ``goal`` on ``grid`` (already inflated); see the module docstring."""
+    return grow_rrt_star(start, goal, grid, config or RRTStarConfig(), rng or np.random.default_rng()).result
