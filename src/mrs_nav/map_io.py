@@ -59,7 +59,9 @@ def read_pgm(path: Path) -> npt.NDArray[np.int32]:
     if magic == b"P5":
         dtype = np.dtype(">u2") if maxval > 255 else np.dtype(np.uint8)
         if len(body) < count * dtype.itemsize:
-            raise MapFileError(f"{path}: PGM is truncated: {len(body)} bytes of pixels, expected {count * dtype.itemsize}")
+            raise MapFileError(
+                f"{path}: PGM is truncated: {len(body)} bytes of pixels, expected {count * dtype.itemsize}"
+            )
         pixels = np.frombuffer(body, dtype=dtype, count=count).astype(np.int32)
     else:
         try:
@@ -112,7 +114,9 @@ def load_map(path: str | Path) -> OccupancyGrid:
     occupied_thresh = _number(meta, "occupied_thresh", path, 0.65)
     free_thresh = _number(meta, "free_thresh", path, 0.196)
     if not 0.0 <= free_thresh <= occupied_thresh <= 1.0:
-        raise MapFileError(f"{path}: need 0 <= free_thresh <= occupied_thresh <= 1, got {free_thresh}, {occupied_thresh}")
+        raise MapFileError(
+            f"{path}: need 0 <= free_thresh <= occupied_thresh <= 1, got {free_thresh}, {occupied_thresh}"
+        )
     mode = meta.get("mode", "trinary")
     if mode not in _MODES:
         raise MapFileError(f"{path}: mode must be one of {', '.join(_MODES)}, got {mode!r}")

@@ -164,7 +164,7 @@ class OccupancyGrid:
         """
         if not (math.isfinite(radius) and radius >= 0.0):
             raise InvalidInputError(f"inflation radius must be finite and >= 0, got {radius}")
-        reach = int(math.floor(radius / self.resolution + 1e-9))
+        reach = math.floor(radius / self.resolution + 1e-9)
         if reach == 0:
             return OccupancyGrid(self.values.copy(), self.resolution, self.origin)
         offsets = np.arange(-reach, reach + 1)

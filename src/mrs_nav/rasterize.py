@@ -1,8 +1,8 @@
 """Rasterising a :class:`~mrs_nav.world.World` into an :class:`~mrs_nav.occupancy_grid.OccupancyGrid`.
 
 The grid covers the world's obstacle footprints (plus ``margin``), its origin snapped to a multiple of the
-resolution. A cell is occupied when the obstacle footprint reaches into the cell: its centre lies strictly inside a box grown
-by half a cell along the box's own axes, or within ``radius + resolution / 2`` of a cylinder's axis. This
+resolution. A cell is occupied when the obstacle footprint reaches into the cell: its centre lies strictly inside
+a box grown by half a cell along the box's own axes, or within ``radius + resolution / 2`` of a cylinder's axis. This
 errs towards marking a cell occupied (conservative for planning). Every other cell is free: a world file
 describes all of its obstacles.
 

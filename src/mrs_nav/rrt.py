@@ -23,7 +23,7 @@ import numpy as np
 from mrs_nav import arcs
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D
-from mrs_nav.occupancy_grid import OccupancyGrid
+from mrs_nav.occupancy_grid import IntArray, OccupancyGrid
 from mrs_nav.planning import PlanResult, path_length
 from mrs_nav.rrt_tree import ArcTree, Search
 
@@ -124,7 +124,7 @@ def sample_random_position(
 def _pick_parent(tree: ArcTree, position: FloatArray, config: RRTConfig) -> int | None:
     """The nearest node with ``position`` between min_step and max_step away and ahead within max_alpha."""
 
-    def first_ok(ids: FloatArray, dist: FloatArray) -> int | None:
+    def first_ok(ids: IntArray, dist: FloatArray) -> int | None:
         heading = tree.yaw[ids]
         delta = position - tree.position[ids]
         # cos of the angle between the node's heading and the direction to the sample
@@ -165,18 +165,20 @@ def grow_rrt(
         node = tree.add(position, float(arc.end_yaw[0]), parent, float(tree.cost[parent] + arc.length[0]))
         to_goal = float(np.hypot(*(goal - position)))
         reached = to_goal <= config.goal_tolerance
-        if config.connect_goal and to_goal <= config.max_step or reached:
+        if (config.connect_goal and to_goal <= config.max_step) or reached:
             final = arcs.connect(position, tree.yaw[node], goal)
             if to_goal <= 1e-9 or arcs.checked(final, grid, math.pi / 2, config.min_turning_radius)[0]:
-                return _solved(tree, node, None if to_goal <= 1e-9 else goal, grid, t0, iteration)
+                return _solved(tree, node, None if to_goal <= 1e-9 else goal, grid, t0=t0, iterations=iteration)
         if reached:
-            return _solved(tree, node, None, grid, t0, iteration)
+            return _solved(tree, node, None, grid, t0=t0, iterations=iteration)
     elapsed = time.perf_counter() - t0
     reason = "iteration budget used up" if iteration >= limit else "time budget used up"
     return Search(failed(start, elapsed, iteration, len(tree), f"no path found: {reason}"), tree, ())
 
 
-def _solved(tree: ArcTree, node: int, tail: FloatArray | None, grid: OccupancyGrid, t0: float, iterations: int) -> Search:
+def _solved(
+    tree: ArcTree, node: int, tail: FloatArray | None, grid: OccupancyGrid, *, t0: float, iterations: int
+) -> Search:
     path = tree.path_poses(tree.branch(node), grid.resolution, tail)
     elapsed = time.perf_counter() - t0
     length = path_length(path)
