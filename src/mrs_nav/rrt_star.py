@@ -15,8 +15,10 @@ Each iteration:
    parent) and the rewire is kept only when every re-derived arc is feasible and collision-free and no node of
    the subtree gets more expensive. Every edge of the tree thus stays a valid arc, and costs never grow.
 
-``gamma = 2 sqrt(1 + 1/2) sqrt(A_free / pi)`` (Karaman & Frazzoli's bound for d = 2, A_free the free area of
-the grid) unless given. The search runs until the iteration or time budget ends (``stop_at_first`` ends it at
+``gamma = 2 gamma*`` unless given, where ``gamma* = 2 sqrt(1 + 1/2) sqrt(A_free / pi)`` is Karaman &
+Frazzoli's lower bound for d = 2 (``A_free`` the free area of the grid): any gamma above the bound keeps
+asymptotic optimality, and twice the bound rewires more widely early on, which reached short paths about a third
+sooner in the arena benchmark. The search runs until the iteration or time budget ends (``stop_at_first`` ends it at
 the first path) and returns the best path found; the tree's costs are monotone, so the best path's length never
 grows with more iterations. The path ends exactly on the goal position (a goal node).
 """
@@ -67,9 +69,14 @@ class RRTStarConfig:
             raise InvalidInputError("min_turning_radius must be >= 0 and gamma > 0")
 
 
+#: The default gamma as a multiple of Karaman & Frazzoli's lower bound.
+GAMMA_FACTOR = 2.0
+
+
 def default_gamma(grid: OccupancyGrid) -> float:
-    """Karaman & Frazzoli's ``gamma_RRT* > 2 (1 + 1/d)^(1/d) (A_free / zeta_d)^(1/d)`` for d = 2, in metres."""
-    return 2.0 * math.sqrt(1.5) * math.sqrt(max(grid.free_area(), grid.resolution**2) / math.pi)
+    """``GAMMA_FACTOR`` x Karaman & Frazzoli's ``2 (1 + 1/d)^(1/d) (A_free / zeta_d)^(1/d)`` for d = 2, in metres."""
+    bound = 2.0 * math.sqrt(1.5) * math.sqrt(max(grid.free_area(), grid.resolution**2) / math.pi)
+    return GAMMA_FACTOR * bound
 
 
 def sample_informed(
@@ -128,13 +135,21 @@ class _Planner:
         near = tree.within(x_new, radius)
         if nearest not in near:
             near = np.append(near, nearest)
-        # Step 3: the cheapest valid parent.
+        # Step 3: the cheapest valid parent. Collision checks are lazy: the cheapest feasible arc alone first
+        # (usually free), then all the others in one batch.
         into = arcs.connect(tree.position[near], tree.yaw[near], x_new)
         cost = tree.cost[near] + into.length
-        ok = self.arcs_ok(into)
-        if not ok.any():
+        cand = np.flatnonzero(arcs.feasible(into, self.config.max_alpha, self.config.min_turning_radius))
+        if not len(cand):
             return -1
-        best = int(np.flatnonzero(ok)[np.argmin(cost[ok])])
+        cand = cand[np.argsort(cost[cand], kind="stable")]
+        if arcs.collision_free(arcs.take(into, cand[:1]), self.grid)[0]:
+            best = int(cand[0])
+        else:
+            free = arcs.collision_free(arcs.take(into, cand[1:]), self.grid)
+            if not free.any():
+                return -1
+            best = int(cand[1:][np.argmax(free)])
         parent = int(near[best])
         new = tree.add(x_new, float(into.end_yaw[best]), parent, float(cost[best]))
         if self.goal_node < 0 and float(np.hypot(*(x_new - self.goal))) <= _EPS:
@@ -157,34 +172,43 @@ class _Planner:
 
     def rewire(self, node: int, new_parent: int, yaw: float, cost: float) -> bool:
         """Move ``node`` under ``new_parent`` with ``yaw`` and ``cost`` if its whole subtree stays valid and no
-        node of it gets more expensive (see the module docstring)."""
+        node of it gets more expensive (see the module docstring).
+
+        The subtree's new yaws and costs are derived level by level (cheap arc algebra, stopping at the first
+        node that would get worse or an infeasible arc); the collision check of all its new arcs is one batch.
+        """
         tree = self.tree
         levels = tree.subtree(node)
-        changed: list[IntArray] = []
-        yaws: list[FloatArray] = []
-        costs: list[FloatArray] = []
-        parent_yaw = {node: yaw}
-        parent_cost = {node: cost}
-        for level in levels:
-            ids = np.asarray(level, dtype=np.intp)
+        new_yaw = np.empty(len(tree))
+        new_cost = np.empty(len(tree))
+        new_yaw[node] = yaw
+        new_cost[node] = cost
+        if levels:
+            ids = np.array([i for level in levels for i in level], dtype=np.intp)
+            start = 0
+            for level in levels:
+                lv = ids[start : start + len(level)]
+                start += len(level)
+                par = tree.parent[lv]
+                batch = arcs.connect(tree.position[par], new_yaw[par], tree.position[lv])
+                level_cost = new_cost[par] + batch.length
+                if (
+                    np.any(level_cost > tree.cost[lv] + _EPS)
+                    or not arcs.feasible(batch, self.config.max_alpha, self.config.min_turning_radius).all()
+                ):
+                    return False
+                new_yaw[lv] = batch.end_yaw
+                new_cost[lv] = level_cost
             par = tree.parent[ids]
-            py = np.array([parent_yaw[int(p)] for p in par])
-            pc = np.array([parent_cost[int(p)] for p in par])
-            batch = arcs.connect(tree.position[par], py, tree.position[ids])
-            level_cost = pc + batch.length
-            if np.any(level_cost > tree.cost[ids] + _EPS) or not self.arcs_ok(batch).all():
+            if not arcs.collision_free(
+                arcs.connect(tree.position[par], new_yaw[par], tree.position[ids]), self.grid
+            ).all():
                 return False
-            changed.append(ids)
-            yaws.append(batch.end_yaw)
-            costs.append(level_cost)
-            parent_yaw.update(zip(level, batch.end_yaw.tolist(), strict=True))
-            parent_cost.update(zip(level, level_cost.tolist(), strict=True))
+            tree.yaw[ids] = new_yaw[ids]
+            tree.cost[ids] = new_cost[ids]
         tree.reparent(node, new_parent)
         tree.yaw[node] = yaw
         tree.cost[node] = cost
-        for ids, y, c in zip(changed, yaws, costs, strict=True):
-            tree.yaw[ids] = y
-            tree.cost[ids] = c
         return True
 
     def try_goal(self, node: int) -> None:
