@@ -1,8 +1,14 @@
-"""Setup for catkin's catkin_python_setup(); pip reads the metadata from pyproject.toml.
+"""Setup for catkin's catkin_python_setup() and for pip (whose metadata is in pyproject.toml).
 
-catkin interrogates the arguments of this setup() call, so the packages and their folder are named here.
+catkin interrogates the arguments of this setup() call: it needs the packages, their folder, and the version,
+which must equal package.xml's, so the version is read from there (the one place it is written).
 """
+
+import xml.etree.ElementTree as ET
+from pathlib import Path
 
 from setuptools import find_packages, setup
 
-setup(packages=find_packages("src"), package_dir={"": "src"})
+version = ET.parse(Path(__file__).with_name("package.xml")).getroot().findtext("version")
+
+setup(version=version, packages=find_packages("src"), package_dir={"": "src"})

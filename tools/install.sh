@@ -9,7 +9,7 @@ venv=${VENV:-$here/.venv}
 stamp=$venv/.mrs_nav-installed
 
 apt_packages=(
-  ros-core python3-rosbag python3-rostest librostest-dev catkin python3-catkin-pkg cmake g++
+  ros-core rosbash rospack-tools python3-rosbag python3-rostest librostest-dev catkin python3-catkin-pkg cmake g++
   python3-tf2-ros python3-tf python3-tf2-geometry-msgs
   python3-std-msgs python3-geometry-msgs python3-nav-msgs python3-sensor-msgs
   python3-visualization-msgs python3-tf2-msgs ros-robot-state-publisher

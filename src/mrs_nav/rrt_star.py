@@ -34,7 +34,7 @@ import numpy as np
 from mrs_nav import arcs
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D
-from mrs_nav.occupancy_grid import BoolArray, IntArray, OccupancyGrid
+from mrs_nav.occupancy_grid import BoolArray, OccupancyGrid
 from mrs_nav.planning import PlanResult, path_length
 from mrs_nav.rrt import check_budget, check_query, failed, sample_random_position
 from mrs_nav.rrt_tree import ArcTree, Search

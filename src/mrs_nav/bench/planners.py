@@ -31,12 +31,12 @@ from mrs_nav.geometry import Pose2D
 from mrs_nav.occupancy_grid import BURGER_RADIUS, OCCUPIED, OccupancyGrid
 from mrs_nav.rasterize import rasterize_world
 from mrs_nav.rrt import RRTConfig, grow_rrt
+from mrs_nav.rrt_scenarios import CHECKOUT, COURSE_GOAL, COURSE_START, course_grid
 from mrs_nav.rrt_star import RRTStarConfig, grow_rrt_star
 from mrs_nav.world import load_world
 
-_CHECKOUT = Path(__file__).resolve().parents[3]
-ARENA_START = Pose2D(-1.5, -1.5, 0.0)
-ARENA_GOAL = np.array([1.5, 1.5])
+ARENA_START = COURSE_START
+ARENA_GOAL = COURSE_GOAL
 OFFICE_START = Pose2D(-5.0, -5.0, 0.0)
 OFFICE_GOAL = np.array([5.0, 5.0])
 
@@ -50,13 +50,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--office",
         type=Path,
-        default=_CHECKOUT / "worlds" / "office.world",
+        default=CHECKOUT / "worlds" / "office.world",
         help="20 m x 20 m world for the scaling runs (a synthetic grid is used when missing)",
     )
-
-
-def arena_grid() -> OccupancyGrid:
-    return rasterize_world(load_world(_CHECKOUT / "worlds" / "simple.world"), 0.05)
 
 
 def synthetic_office(resolution: float = 0.05) -> OccupancyGrid:
@@ -325,7 +321,7 @@ def _scaling_section(args: argparse.Namespace, arena: OccupancyGrid) -> str:
 
 
 def run(args: argparse.Namespace) -> str:
-    arena = arena_grid().inflate(BURGER_RADIUS)
+    arena = course_grid().inflate(BURGER_RADIUS)
     arena_text, _ = _arena_section(args, arena)
     parts = [
         f"Course arena, start (-1.5, -1.5, 0), goal (1.5, 1.5), robot radius {BURGER_RADIUS} m, "

@@ -53,7 +53,21 @@ def test_plan_on_a_world_file_rasterises_it(capsys: pytest.CaptureFixture[str]) 
 
 
 def test_no_path_within_budget_exits_2(capsys: pytest.CaptureFixture[str]) -> None:
-    code = main(["plan", "--map", MAP, "--start", "-1.5,-1.5,0", "--goal", "1.5,1.5", "--iterations", "1"])
+    code = main(
+        [
+            "plan",
+            "--map",
+            MAP,
+            "--planner",
+            "rrt_star",
+            "--start",
+            "-1.5,-1.5,0",
+            "--goal",
+            "1.5,1.5",
+            "--iterations",
+            "1",
+        ]
+    )
     assert code == 2
     assert capsys.readouterr().err.strip().startswith("ERROR: goal not reached")
 
@@ -69,7 +83,7 @@ def test_no_path_within_budget_exits_2(capsys: pytest.CaptureFixture[str]) -> No
     ],
 )
 def test_bad_queries_exit_1_with_one_line(args: list[str], message: str, capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["plan", "--map", MAP, *args]) == 1
+    assert main(["plan", "--map", MAP, "--planner", "rrt_star", *args]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1
     assert message in err
@@ -78,7 +92,7 @@ def test_bad_queries_exit_1_with_one_line(args: list[str], message: str, capsys:
 def test_unreadable_map_exits_1(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     bad = tmp_path / "bad.yaml"
     bad.write_text("image: [\n")
-    assert main(["plan", "--map", str(bad), "--start", "0,0", "--goal", "1,1"]) == 1
+    assert main(["plan", "--map", str(bad), "--planner", "rrt", "--start", "0,0", "--goal", "1,1"]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1
     assert "bad.yaml: malformed YAML" in err
