@@ -146,9 +146,13 @@ def _collect(
 
 
 def _write(output: Path, connections: dict[int, _Connection], messages: list[tuple[int, int, bytes]]) -> None:
-    output.unlink(missing_ok=True)
-    writer = Writer(output)
-    writer.open()
+    try:
+        output.parent.mkdir(parents=True, exist_ok=True)
+        output.unlink(missing_ok=True)
+        writer = Writer(output)
+        writer.open()
+    except OSError as err:
+        raise BagError(f"cannot write the rebuilt bag {output}: {err.strerror}") from None
     try:
         added: dict[int, Any] = {}
         by_args: dict[_Connection, Any] = {}
