@@ -13,29 +13,19 @@ ended, whatever happens.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import math
-import os
-import re
-import signal
-import socket
-import subprocess
-import sys
 import tempfile
 import time
-import xmlrpc.client
-from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
 
 from mrs_nav.bench.results import markdown_table
+from mrs_nav.bench.ros_processes import CHECKOUT, RosProcessError, process, read_clock, roscore
 from mrs_nav.cli.common import parse_floats
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.sim import Simulator, SimulatorConfig
 from mrs_nav.world import load_world
 
-CHECKOUT = Path(__file__).resolve().parents[3]
 OFFICE = CHECKOUT / "worlds" / "office.world"
 OFFICE_START = Pose2D(-5.0, -5.0, 0.0)
 TARGET_RTF = 50.0
@@ -105,80 +95,11 @@ def bench_core(world_path: Path, start: Pose2D, duration: float) -> dict[str, fl
     }
 
 
-def _free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
-
-
-def _ros_env(uri: str, log_dir: Path) -> dict[str, str]:
-    env = dict(os.environ)
-    env.update(
-        ROS_MASTER_URI=uri,
-        ROS_HOME=str(log_dir),
-        ROS_LOG_DIR=str(log_dir),
-        ROS_IP="127.0.0.1",
-        ROS_PYTHON_VERSION="3",
-        PATH=f"{Path(sys.executable).parent}:{env.get('PATH', '')}",
-    )
-    if (CHECKOUT / "package.xml").is_file():
-        env["ROS_PACKAGE_PATH"] = f"{CHECKOUT}:{env.get('ROS_PACKAGE_PATH', '')}".rstrip(":")
-        env["PYTHONPATH"] = f"{CHECKOUT / 'src'}:{env.get('PYTHONPATH', '')}".rstrip(":")
-    return env
-
-
-@contextlib.contextmanager
-def _process(args: list[str], env: dict[str, str], log: Path) -> Iterator[subprocess.Popen[bytes]]:
-    """A process in its own group, SIGINTed (then killed) at the end of the block."""
-    with log.open("wb") as out:
-        proc = subprocess.Popen(args, env=env, start_new_session=True, stdout=out, stderr=subprocess.STDOUT)
-        try:
-            yield proc
-        finally:
-            if proc.poll() is None:
-                with contextlib.suppress(ProcessLookupError):
-                    os.killpg(proc.pid, signal.SIGINT)
-                with contextlib.suppress(subprocess.TimeoutExpired):
-                    proc.wait(timeout=10)
-            with contextlib.suppress(ProcessLookupError):
-                os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait(timeout=5)
-
-
-def _wait_for_master(uri: str, timeout: float = 30.0) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        try:
-            reply: Any = xmlrpc.client.ServerProxy(uri).getPid("/mrs_nav_bench")
-            if reply[0] == 1:
-                return
-        except OSError:
-            pass
-        time.sleep(0.1)
-    raise InvalidInputError(f"roscore at {uri} did not come up within {timeout:.0f} s")
-
-
-def _clock(env: dict[str, str], timeout: float = 20.0) -> tuple[float, float]:
-    """(sim seconds on /clock, wall time when it was read)."""
-    out = subprocess.run(
-        ["rostopic", "echo", "-n", "1", "/clock"], env=env, capture_output=True, text=True, timeout=timeout, check=False
-    )
-    wall = time.monotonic()
-    match = re.search(r"secs:\s*(\d+)\s*\n\s*nsecs:\s*(\d+)", out.stdout)
-    if not match:
-        raise InvalidInputError(f"could not read /clock from the simulator: {out.stderr.strip()[-300:]}")
-    return int(match.group(1)) + int(match.group(2)) * 1e-9, wall
-
-
 def bench_ros(world_path: Path, start: Pose2D, wall_seconds: float) -> dict[str, float]:
     """The node at real_time_factor 0: sim seconds per wall second over a window of ``wall_seconds``."""
-    port = _free_port()
-    uri = f"http://127.0.0.1:{port}"
     with tempfile.TemporaryDirectory(prefix="mrs_nav_bench_") as tmp:
         log_dir = Path(tmp)
-        env = _ros_env(uri, log_dir)
-        with _process(["roscore", "-p", str(port)], env, log_dir / "roscore.log"):
-            _wait_for_master(uri)
+        with roscore(log_dir) as env:
             launch = [
                 "roslaunch",
                 "--wait",
@@ -190,12 +111,12 @@ def bench_ros(world_path: Path, start: Pose2D, wall_seconds: float) -> dict[str,
                 f"yaw:={start.yaw}",
                 "real_time_factor:=0",
             ]
-            with _process(launch, env, log_dir / "launch.log") as proc:
-                sim0, wall0 = _clock(env, timeout=60.0)
+            with process(launch, env, log_dir / "launch.log") as proc:
+                sim0, wall0 = read_clock(env, timeout=60.0)
                 time.sleep(wall_seconds)
-                sim1, wall1 = _clock(env)
+                sim1, wall1 = read_clock(env)
                 if proc.poll() is not None:
-                    raise InvalidInputError(f"roslaunch exited early: {(log_dir / 'launch.log').read_text()[-500:]}")
+                    raise RosProcessError(f"roslaunch exited early: {(log_dir / 'launch.log').read_text()[-500:]}")
     return {"sim_seconds": sim1 - sim0, "wall_seconds": wall1 - wall0, "rtf": (sim1 - sim0) / (wall1 - wall0)}
 
 
@@ -240,7 +161,7 @@ def run(args: argparse.Namespace) -> str:
         lines += [
             "",
             "ROS node at maximum rate (`simulation.launch real_time_factor:=0`, own roscore on a free port; "
-            "/clock 100 Hz, /odom + tf + ground truth + joint_states 50 Hz, /scan 5 Hz of sim time; "
+            "/clock 100 Hz, /odom + tf + ground truth 50 Hz, joint_states 10 Hz, /scan 5 Hz of sim time; "
             "robot_state_publisher running; nobody else subscribed):",
             "",
             markdown_table(
