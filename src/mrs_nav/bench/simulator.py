@@ -24,6 +24,7 @@ from mrs_nav.cli.common import parse_floats
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.sim import Simulator, SimulatorConfig
+from mrs_nav.sim.scripted_drive import OFFICE_CORRIDOR_LOOP, WaypointDriver
 from mrs_nav.world import load_world
 
 OFFICE = CHECKOUT / "worlds" / "office.world"
@@ -39,25 +40,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-ros", action="store_true", help="skip the ROS run")
 
 
-def _square_loop_command(pose: Pose2D, half_side: float) -> tuple[float, float]:
-    """Follow the square loop |x|, |y| = ``half_side`` counter-clockwise (the office corridor's centre line).
-
-    Pure pursuit on the perimeter: aim 0.6 m ahead of the closest point, turn in proportion to the heading
-    error, slow down in sharp turns.
-    """
-    h = half_side
-    # perimeter coordinate s in [0, 8h): bottom edge (left to right), right (up), top (right to left), left (down)
-    x, y = min(max(pose.x, -h), h), min(max(pose.y, -h), h)
-    edges = [(abs(pose.y + h), x + h), (abs(pose.x - h), 2 * h + y + h), (abs(pose.y - h), 4 * h + h - x)]
-    edges.append((abs(pose.x + h), 6 * h + h - y))
-    s = (min(edges)[1] + 0.6) % (8 * h)
-    side, along = divmod(s, 2 * h)
-    target = [(-h + along, -h), (h, -h + along), (h - along, h), (-h, h - along)][int(side)]
-    error = math.atan2(target[1] - pose.y, target[0] - pose.x) - pose.yaw
-    error = math.atan2(math.sin(error), math.cos(error))
-    return 0.2 * max(0.0, math.cos(error)), 2.0 * error
-
-
 def bench_core(world_path: Path, start: Pose2D, duration: float) -> dict[str, float]:
     """Run the core for ``duration`` sim seconds; the real-time factor and the cost of a step and of a scan.
 
@@ -65,6 +47,7 @@ def bench_core(world_path: Path, start: Pose2D, duration: float) -> dict[str, fl
     """
     world = load_world(world_path)
     sim = Simulator(world, SimulatorConfig(), start)
+    driver = WaypointDriver(OFFICE_CORRIDOR_LOOP)
     steps = round(duration * sim.config.physics_rate)
     plain: list[float] = []
     with_scan: list[float] = []
@@ -75,7 +58,8 @@ def bench_core(world_path: Path, start: Pose2D, duration: float) -> dict[str, fl
         pose = sim.ground_truth()
         travelled += math.hypot(pose.x - previous.x, pose.y - previous.y)
         previous = pose
-        sim.set_command(*_square_loop_command(pose, 5.0))
+        command = driver.command(pose)
+        sim.set_command(command.v, command.omega)
         t = time.perf_counter()
         scan = sim.step()
         (plain if scan is None else with_scan).append(time.perf_counter() - t)
