@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import rospkg
 import rospy
 import tf2_ros
 from geometry_msgs.msg import Twist
@@ -109,7 +110,7 @@ class SimulatorNodeConfig:
             seed=int(get("seed", 0)),
         )
         return cls(
-            world=Path(world),
+            world=resolve_world(world),
             start=Pose2D(float(get("x", 0.0)), float(get("y", 0.0)), float(get("yaw", 0.0))),
             sim=sim,
             real_time_factor=float(get("real_time_factor", 1.0)),
@@ -139,6 +140,17 @@ def _own_the_clock() -> Any:
     subscriber.unregister()
     simtime._clock_sub = None
     return setter
+
+
+def resolve_world(name: str) -> Path:
+    """A world file path; a bare name (``office`` or ``office.world``) means one of this package's worlds."""
+    if "/" in name:
+        return Path(name)
+    filename = name if name.endswith(".world") else f"{name}.world"
+    try:
+        return Path(rospkg.RosPack().get_path("mrs_nav")) / "worlds" / filename
+    except rospkg.ResourceNotFound:
+        return Path(name)
 
 
 class SimulatorNode:
