@@ -3,7 +3,8 @@
 Subscribes ``cmd_vel`` (geometry_msgs/Twist). Publishes ``clock`` (it *is* the clock: run with
 ``/use_sim_time`` true), ``odom`` (nav_msgs/Odometry) and tf ``odom -> base_footprint``, ``scan``
 (sensor_msgs/LaserScan, frame ``base_scan``), ``ground_truth/odom`` (the true pose, frame ``world``, which
-coincides with ``odom`` at time zero) and ``joint_states`` (the wheels, for robot_state_publisher, which
+coincides with ``odom`` at time zero), ``ground_truth/contacts`` (std_msgs/UInt32, latched: how many times the
+robot has run into an obstacle) and ``joint_states`` (the wheels, for robot_state_publisher, which
 publishes the static base_footprint -> base_link -> base_scan from ``urdf/burger.urdf``).
 
 The node steps the simulator in its own loop at the fixed physics rate, paced against the wall clock by
@@ -30,6 +31,7 @@ from rosgraph_msgs.msg import Clock
 from rospy import rostime
 from rospy.impl import simtime
 from sensor_msgs.msg import JointState, LaserScan
+from std_msgs.msg import UInt32
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
@@ -166,6 +168,8 @@ class SimulatorNode:
         self._clock_pub = rospy.Publisher("clock", Clock, queue_size=10)
         self._odom_pub = rospy.Publisher("odom", OdometryMsg, queue_size=10)
         self._truth_pub = rospy.Publisher("ground_truth/odom", OdometryMsg, queue_size=10)
+        self._contacts_pub = rospy.Publisher("ground_truth/contacts", UInt32, queue_size=1, latch=True)
+        self._contact_events = -1
         self._scan_pub = rospy.Publisher("scan", LaserScan, queue_size=5)
         self._joints_pub = rospy.Publisher("joint_states", JointState, queue_size=10)
         self._tf = tf2_ros.TransformBroadcaster() if config.publish_tf else None
@@ -214,7 +218,10 @@ class SimulatorNode:
         """One physics step and whatever publications fall due at its end."""
         with self._lock:
             scan = self.sim.step()
-            steps, now = self.sim.steps, self.sim.time
+            steps, now, contacts = self.sim.steps, self.sim.time, self.sim.contacts.events
+        if contacts != self._contact_events:
+            self._contact_events = contacts
+            self._contacts_pub.publish(UInt32(data=contacts))
         if steps % self._clock_every == 0:
             self._clock_pub.publish(clock_msg(now))
             self._set_own_time(to_ros_time(now))
