@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections.abc import Iterator
@@ -121,6 +122,10 @@ def test_cmd_vel_moves_the_robot_and_the_watchdog_stops_it(simulation: Any) -> N
     try:
         wait_for(lambda: truth.last is not None and odom.last is not None, 30.0, "/ground_truth/odom and /odom")
         start_x = truth.last.pose.pose.position.x
+        broken = Twist()
+        broken.linear.x = math.nan
+        for _ in range(5):
+            pub.publish(broken)  # logged and ignored: the node must live on and obey the next good command
         forward = Twist()
         forward.linear.x = 0.2
 
