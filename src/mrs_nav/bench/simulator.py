@@ -13,29 +13,20 @@ ended, whatever happens.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import math
-import os
-import re
-import signal
-import socket
-import subprocess
-import sys
 import tempfile
 import time
-import xmlrpc.client
-from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
 
 from mrs_nav.bench.results import markdown_table
+from mrs_nav.bench.ros_processes import CHECKOUT, RosProcessError, process, read_clock, roscore
 from mrs_nav.cli.common import parse_floats
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.sim import Simulator, SimulatorConfig
+from mrs_nav.sim.scripted_drive import OFFICE_CORRIDOR_LOOP, WaypointDriver
 from mrs_nav.world import load_world
 
-CHECKOUT = Path(__file__).resolve().parents[3]
 OFFICE = CHECKOUT / "worlds" / "office.world"
 OFFICE_START = Pose2D(-5.0, -5.0, 0.0)
 TARGET_RTF = 50.0
@@ -49,25 +40,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-ros", action="store_true", help="skip the ROS run")
 
 
-def _square_loop_command(pose: Pose2D, half_side: float) -> tuple[float, float]:
-    """Follow the square loop |x|, |y| = ``half_side`` counter-clockwise (the office corridor's centre line).
-
-    Pure pursuit on the perimeter: aim 0.6 m ahead of the closest point, turn in proportion to the heading
-    error, slow down in sharp turns.
-    """
-    h = half_side
-    # perimeter coordinate s in [0, 8h): bottom edge (left to right), right (up), top (right to left), left (down)
-    x, y = min(max(pose.x, -h), h), min(max(pose.y, -h), h)
-    edges = [(abs(pose.y + h), x + h), (abs(pose.x - h), 2 * h + y + h), (abs(pose.y - h), 4 * h + h - x)]
-    edges.append((abs(pose.x + h), 6 * h + h - y))
-    s = (min(edges)[1] + 0.6) % (8 * h)
-    side, along = divmod(s, 2 * h)
-    target = [(-h + along, -h), (h, -h + along), (h - along, h), (-h, h - along)][int(side)]
-    error = math.atan2(target[1] - pose.y, target[0] - pose.x) - pose.yaw
-    error = math.atan2(math.sin(error), math.cos(error))
-    return 0.2 * max(0.0, math.cos(error)), 2.0 * error
-
-
 def bench_core(world_path: Path, start: Pose2D, duration: float) -> dict[str, float]:
     """Run the core for ``duration`` sim seconds; the real-time factor and the cost of a step and of a scan.
 
@@ -75,6 +47,7 @@ def bench_core(world_path: Path, start: Pose2D, duration: float) -> dict[str, fl
     """
     world = load_world(world_path)
     sim = Simulator(world, SimulatorConfig(), start)
+    driver = WaypointDriver(OFFICE_CORRIDOR_LOOP)
     steps = round(duration * sim.config.physics_rate)
     plain: list[float] = []
     with_scan: list[float] = []
@@ -85,7 +58,8 @@ def bench_core(world_path: Path, start: Pose2D, duration: float) -> dict[str, fl
         pose = sim.ground_truth()
         travelled += math.hypot(pose.x - previous.x, pose.y - previous.y)
         previous = pose
-        sim.set_command(*_square_loop_command(pose, 5.0))
+        command = driver.command(pose)
+        sim.set_command(command.v, command.omega)
         t = time.perf_counter()
         scan = sim.step()
         (plain if scan is None else with_scan).append(time.perf_counter() - t)
@@ -105,80 +79,11 @@ def bench_core(world_path: Path, start: Pose2D, duration: float) -> dict[str, fl
     }
 
 
-def _free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
-
-
-def _ros_env(uri: str, log_dir: Path) -> dict[str, str]:
-    env = dict(os.environ)
-    env.update(
-        ROS_MASTER_URI=uri,
-        ROS_HOME=str(log_dir),
-        ROS_LOG_DIR=str(log_dir),
-        ROS_IP="127.0.0.1",
-        ROS_PYTHON_VERSION="3",
-        PATH=f"{Path(sys.executable).parent}:{env.get('PATH', '')}",
-    )
-    if (CHECKOUT / "package.xml").is_file():
-        env["ROS_PACKAGE_PATH"] = f"{CHECKOUT}:{env.get('ROS_PACKAGE_PATH', '')}".rstrip(":")
-        env["PYTHONPATH"] = f"{CHECKOUT / 'src'}:{env.get('PYTHONPATH', '')}".rstrip(":")
-    return env
-
-
-@contextlib.contextmanager
-def _process(args: list[str], env: dict[str, str], log: Path) -> Iterator[subprocess.Popen[bytes]]:
-    """A process in its own group, SIGINTed (then killed) at the end of the block."""
-    with log.open("wb") as out:
-        proc = subprocess.Popen(args, env=env, start_new_session=True, stdout=out, stderr=subprocess.STDOUT)
-        try:
-            yield proc
-        finally:
-            if proc.poll() is None:
-                with contextlib.suppress(ProcessLookupError):
-                    os.killpg(proc.pid, signal.SIGINT)
-                with contextlib.suppress(subprocess.TimeoutExpired):
-                    proc.wait(timeout=10)
-            with contextlib.suppress(ProcessLookupError):
-                os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait(timeout=5)
-
-
-def _wait_for_master(uri: str, timeout: float = 30.0) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        try:
-            reply: Any = xmlrpc.client.ServerProxy(uri).getPid("/mrs_nav_bench")
-            if reply[0] == 1:
-                return
-        except OSError:
-            pass
-        time.sleep(0.1)
-    raise InvalidInputError(f"roscore at {uri} did not come up within {timeout:.0f} s")
-
-
-def _clock(env: dict[str, str], timeout: float = 20.0) -> tuple[float, float]:
-    """(sim seconds on /clock, wall time when it was read)."""
-    out = subprocess.run(
-        ["rostopic", "echo", "-n", "1", "/clock"], env=env, capture_output=True, text=True, timeout=timeout, check=False
-    )
-    wall = time.monotonic()
-    match = re.search(r"secs:\s*(\d+)\s*\n\s*nsecs:\s*(\d+)", out.stdout)
-    if not match:
-        raise InvalidInputError(f"could not read /clock from the simulator: {out.stderr.strip()[-300:]}")
-    return int(match.group(1)) + int(match.group(2)) * 1e-9, wall
-
-
 def bench_ros(world_path: Path, start: Pose2D, wall_seconds: float) -> dict[str, float]:
     """The node at real_time_factor 0: sim seconds per wall second over a window of ``wall_seconds``."""
-    port = _free_port()
-    uri = f"http://127.0.0.1:{port}"
     with tempfile.TemporaryDirectory(prefix="mrs_nav_bench_") as tmp:
         log_dir = Path(tmp)
-        env = _ros_env(uri, log_dir)
-        with _process(["roscore", "-p", str(port)], env, log_dir / "roscore.log"):
-            _wait_for_master(uri)
+        with roscore(log_dir) as env:
             launch = [
                 "roslaunch",
                 "--wait",
@@ -190,12 +95,12 @@ def bench_ros(world_path: Path, start: Pose2D, wall_seconds: float) -> dict[str,
                 f"yaw:={start.yaw}",
                 "real_time_factor:=0",
             ]
-            with _process(launch, env, log_dir / "launch.log") as proc:
-                sim0, wall0 = _clock(env, timeout=60.0)
+            with process(launch, env, log_dir / "launch.log") as proc:
+                sim0, wall0 = read_clock(env, timeout=60.0)
                 time.sleep(wall_seconds)
-                sim1, wall1 = _clock(env)
+                sim1, wall1 = read_clock(env)
                 if proc.poll() is not None:
-                    raise InvalidInputError(f"roslaunch exited early: {(log_dir / 'launch.log').read_text()[-500:]}")
+                    raise RosProcessError(f"roslaunch exited early: {(log_dir / 'launch.log').read_text()[-500:]}")
     return {"sim_seconds": sim1 - sim0, "wall_seconds": wall1 - wall0, "rtf": (sim1 - sim0) / (wall1 - wall0)}
 
 
@@ -240,7 +145,7 @@ def run(args: argparse.Namespace) -> str:
         lines += [
             "",
             "ROS node at maximum rate (`simulation.launch real_time_factor:=0`, own roscore on a free port; "
-            "/clock 100 Hz, /odom + tf + ground truth + joint_states 50 Hz, /scan 5 Hz of sim time; "
+            "/clock 100 Hz, /odom + tf + ground truth 50 Hz, joint_states 10 Hz, /scan 5 Hz of sim time; "
             "robot_state_publisher running; nobody else subscribed):",
             "",
             markdown_table(
