@@ -14,7 +14,7 @@ LAUNCH = REPO / "launch"
 
 
 def _args(path):
-    return {a.get("name"): a.get("default") for a in ET.parse(path).getroot().iter("arg")}
+    return {a.get("name"): a.get("default") for a in ET.parse(path).getroot().findall("arg")}
 
 
 def test_record_launch_topics_are_the_session_topics():

@@ -12,6 +12,7 @@ from mrs_nav.cli.main import main
 
 BAGS = Path(__file__).resolve().parent / "data" / "bags"
 GOLDEN = sorted(BAGS.glob("*.golden.json"))
+NAMES = [g.name.removesuffix(".golden.json") for g in GOLDEN]
 
 
 def _replay(bag: Path, golden: Path, out: Path, *extra: str) -> int:
@@ -19,18 +20,36 @@ def _replay(bag: Path, golden: Path, out: Path, *extra: str) -> int:
     return main(["replay", str(bag), *options, "--out", str(out), *extra])
 
 
+@pytest.fixture(scope="module")
+def replays(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple[int, Path, str]]:
+    """Each bag replayed once against its golden file: (exit status, output folder, printed summary)."""
+    capture = pytest.MonkeyPatch()
+    done = {}
+    for name, golden in zip(NAMES, GOLDEN, strict=True):
+        out = tmp_path_factory.mktemp(name)
+        summary = out / "summary.txt"
+        with summary.open("w") as stdout:
+            capture.setattr("sys.stdout", stdout)
+            code = _replay(BAGS / f"{name}.bag", golden, out / "replay", "--against", str(golden), "--json")
+            capture.undo()
+        done[name] = (code, out / "replay", summary.read_text())
+    return done
+
+
 def test_suite_has_bags_from_each_world():
-    assert {g.name.removesuffix(".golden.json") for g in GOLDEN} >= {"simple", "office", "cluttered"}
+    assert set(NAMES) >= {"simple", "office", "cluttered"}
+    for name in NAMES:
+        assert "--plan" in json.loads((BAGS / f"{name}.golden.json").read_text())["options"]
     total = sum(p.stat().st_size for p in BAGS.glob("*.bag"))
     assert total < 5_000_000, f"regression bags take {total} bytes; keep them to a few MB"
 
 
-@pytest.mark.parametrize("golden", GOLDEN, ids=lambda p: p.name.removesuffix(".golden.json"))
-def test_bag_replays_within_its_golden_tolerances(golden, tmp_path, capsys):
-    bag = BAGS / json.loads(golden.read_text())["bag"]
-    assert _replay(bag, golden, tmp_path, "--against", str(golden), "--json") == 0, capsys.readouterr().err
-    summary = json.loads(capsys.readouterr().out)
+@pytest.mark.parametrize("name", NAMES)
+def test_bag_replays_within_its_golden_tolerances(name, replays):
+    code, _, printed = replays[name]
+    summary = json.loads(printed)
     assert summary["regressions"] == []
+    assert code == 0
     metrics = summary["metrics"]
     # The recording and the replay run the same algorithm on the same input: the maps and poses agree.
     assert metrics["map_iou"] >= 0.95
@@ -38,11 +57,10 @@ def test_bag_replays_within_its_golden_tolerances(golden, tmp_path, capsys):
     assert metrics["goals_reachable"] == metrics["goals"] >= 1
 
 
-def test_replay_is_byte_identical(tmp_path):
-    golden = BAGS / "simple.golden.json"
-    first, second = tmp_path / "a", tmp_path / "b"
-    assert _replay(BAGS / "simple.bag", golden, first) == 0
-    assert _replay(BAGS / "simple.bag", golden, second) == 0
+def test_replay_is_byte_identical(replays, tmp_path):
+    _, first, _ = replays["simple"]
+    second = tmp_path / "again"
+    assert _replay(BAGS / "simple.bag", BAGS / "simple.golden.json", second) == 0
     names = sorted(p.name for p in first.iterdir())
     assert names == sorted(p.name for p in second.iterdir())
     assert {"metrics.json", "plans.json", "slam_map.pgm", "slam_map.yaml", "trajectory.csv", "slam_map.png"} <= set(
@@ -52,28 +70,34 @@ def test_replay_is_byte_identical(tmp_path):
         assert (first / name).read_bytes() == (second / name).read_bytes(), name
 
 
+def _slam_only(tmp_path: Path) -> list[str]:
+    return ["replay", str(BAGS / "simple.bag"), "--slam", "--out", str(tmp_path / "out")]
+
+
 def test_regressed_metrics_are_named_and_fail(tmp_path, capsys):
-    golden = json.loads((BAGS / "simple.golden.json").read_text())
-    metrics = golden["metrics"]
+    golden = tmp_path / "strict.golden.json"
+    assert main([*_slam_only(tmp_path), "--write-golden", str(golden)]) == 0
+    record = json.loads(golden.read_text())
+    metrics = record["metrics"]
     metrics["ate_rmse_m"].update(value=metrics["ate_rmse_m"]["value"] / 10, tolerance=0.0)  # now far too good
     metrics["map_iou"]["value"] = 2.0
     metrics["not_produced"] = {"value": 1.0, "tolerance": 0.0, "better": "equal"}
-    strict = tmp_path / "strict.golden.json"
-    strict.write_text(json.dumps(golden))
-    assert _replay(BAGS / "simple.bag", strict, tmp_path / "out", "--against", str(strict)) == 2
+    golden.write_text(json.dumps(record))
+    capsys.readouterr()
+    assert main([*_slam_only(tmp_path), "--against", str(golden)]) == 2
     err = capsys.readouterr().err
     assert "REGRESSED" in err
-    for name in ("ate_rmse_m", "map_iou", "not_produced: missing"):
+    for name in ("ate_rmse_m: ", "map_iou: ", "not_produced: missing"):
         assert name in err
     assert "rpe_trans_mean_m" not in err
 
 
 def test_written_golden_passes_against_itself(tmp_path):
     golden = tmp_path / "new.golden.json"
-    args = ["replay", str(BAGS / "cluttered.bag"), "--slam", "--out", str(tmp_path / "a")]
-    assert main([*args, "--write-golden", str(golden)]) == 0
+    assert main([*_slam_only(tmp_path), "--write-golden", str(golden)]) == 0
     written = json.loads(golden.read_text())
-    assert written["bag"] == "cluttered.bag"
+    assert written["bag"] == "simple.bag"
     assert written["options"] == ["--slam"]
     assert "goals_reachable" not in written["metrics"]  # no --plan, no planning metrics
-    assert main([*args, "--against", str(golden)]) == 0
+    assert {"ate_rmse_m", "map_iou", "slam_vs_recorded_rms_m"} <= set(written["metrics"])
+    assert main([*_slam_only(tmp_path), "--against", str(golden)]) == 0

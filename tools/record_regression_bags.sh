@@ -14,12 +14,21 @@ declare -A DRIVE=(
   [cluttered]="--world cluttered"
 )
 
+# Replays use the SLAM node's parameters (config/slam.yaml), as the demo and the live node do.
+read -r -a PARAMS <<< "$(python - <<'PY'
+import dataclasses, yaml
+from mrs_nav.slam.config import SlamConfig
+values = yaml.safe_load(open("config/slam.yaml"))
+print(" ".join(f"--param={k}={v}" for k, v in values.items() if k in {f.name for f in dataclasses.fields(SlamConfig)}))
+PY
+)"
+
 for name in "${@:-simple office cluttered}"; do
   for n in $name; do
     # shellcheck disable=SC2086  # the drive options are words
     mrs-nav demo ${DRIVE[$n]} --seed 0 --out "$WORK/$n"
     cp "$WORK/$n/session.bag" "$BAGS/$n.bag"
-    mrs-nav replay "$BAGS/$n.bag" --plan --plan-iterations 800 --out "$WORK/$n/replay" \
+    mrs-nav replay "$BAGS/$n.bag" --plan --plan-first --plan-iterations 3000 "${PARAMS[@]}" --out "$WORK/$n/replay" \
       --write-golden "$BAGS/$n.golden.json"
     echo "$BAGS/$n.bag: $(stat -c %s "$BAGS/$n.bag") bytes, golden $BAGS/$n.golden.json"
   done

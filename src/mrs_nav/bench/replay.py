@@ -1,6 +1,7 @@
 """Replay: SLAM over recorded bags offline, as a multiple of real time (bag duration / wall time).
 
-On the regression bags (``tests/data/bags``, simulator sessions at 5 Hz scans, the default SLAM parameters) and on
+On the regression bags (``tests/data/bags``, simulator sessions at 5 Hz scans, with the SLAM parameters of their
+golden files, i.e. the SLAM node's) and on
 the Intel Research Lab log converted with ``carmen2bag`` (odometry noise seed 0, every scan processed, as in the
 SLAM benchmark). Wall time covers reading and decoding the bag as well as SLAM. A progress bar over scans shows on
 a terminal.
@@ -9,6 +10,7 @@ a terminal.
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import tempfile
 from pathlib import Path
@@ -19,6 +21,7 @@ from tqdm import tqdm
 from mrs_nav.bag.from_carmen import carmen_to_bag
 from mrs_nav.bench.results import markdown_table
 from mrs_nav.bench.slam import DEFAULT_LOG, INTEL_CONFIG
+from mrs_nav.cli.replay import parse_params
 from mrs_nav.motion_model import DEFAULT_ALPHAS, OdometryNoise
 from mrs_nav.replay.slam_replay import SlamReplay, replay_slam
 from mrs_nav.slam.config import SlamConfig
@@ -60,8 +63,18 @@ def _row(name: str, result: SlamReplay) -> list[object]:
     ]
 
 
+def golden_config(bag: Path) -> SlamConfig:
+    """The SLAM parameters a bag's golden file replays it with (the core defaults without a golden file)."""
+    golden = bag.with_name(f"{bag.stem}.golden.json")
+    if not golden.is_file():
+        return SlamConfig()
+    options = json.loads(golden.read_text(encoding="utf-8")).get("options", [])
+    return parse_params([o.removeprefix("--param=") for o in options if o.startswith("--param=")])
+
+
 def run(args: argparse.Namespace) -> str:
-    rows = [_row(bag.name, _timed(bag, SlamConfig(), args.repeat, bag.stem)) for bag in sorted(args.bags.glob("*.bag"))]
+    bags = sorted(args.bags.glob("*.bag"))
+    rows = [_row(bag.name, _timed(bag, golden_config(bag), args.repeat, bag.stem)) for bag in bags]
     intel_factor = None
     if args.log.is_file():
         with tempfile.TemporaryDirectory() as tmp:

@@ -42,7 +42,10 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "--plan-iterations", type=int, default=1500, help="RRT* iterations per goal with --plan (default: 1500)"
     )
-    parser.add_argument("--seed", type=int, default=0, help="planner seed with --plan (goal i uses seed + i)")
+    parser.add_argument(
+        "--plan-first", action="store_true", help="stop each re-planning query at its first path (reachability only)"
+    )
+    parser.add_argument("--seed", type=int, default=0, help="planner seed with --plan (>= 0)")
     parser.add_argument(
         "--against", type=Path, metavar="GOLDEN.json", help="exit 2 naming each metric worse than the golden file"
     )
@@ -75,12 +78,13 @@ def _options(args: argparse.Namespace) -> list[str]:
     options = ["--slam", *(f"--param={p}" for p in args.param)]
     if args.plan:
         options += ["--plan", f"--plan-iterations={args.plan_iterations}", f"--seed={args.seed}"]
+        options += ["--plan-first"] if args.plan_first else []
     return options
 
 
 def _replay(args: argparse.Namespace, config: SlamConfig) -> SessionReplay:
     """Replay the bag (a rebuilt copy in a temporary folder when it has no index)."""
-    plan = PlanOptions(args.plan_iterations, args.seed) if args.plan else None
+    plan = PlanOptions(args.plan_iterations, args.seed, args.plan_first) if args.plan else None
     bar: Any = None
     progress = None
     if sys.stderr.isatty():
@@ -100,8 +104,8 @@ def _replay(args: argparse.Namespace, config: SlamConfig) -> SessionReplay:
 def run(args: argparse.Namespace) -> int:
     if not (args.slam or args.plan):
         return fail("nothing to do: give --slam and/or --plan")
-    if args.plan_iterations < 1:
-        return fail(f"--plan-iterations must be >= 1, got {args.plan_iterations}")
+    if args.plan_iterations < 1 or args.seed < 0:
+        return fail(f"--plan-iterations must be >= 1 and --seed >= 0, got {args.plan_iterations} and {args.seed}")
     config = parse_params(args.param)
     golden = load_golden(args.against) if args.against else None
     session = _replay(args, config)

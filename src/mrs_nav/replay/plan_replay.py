@@ -46,10 +46,14 @@ def replan_goals(
     *,
     iterations: int = 1500,
     seed: int = 0,
+    first_path: bool = False,
 ) -> list[GoalPlan]:
-    """Plan to every goal from ``start_at(goal stamp)`` (goals with no known start are skipped); ``seed`` >= 0."""
+    """Plan to every goal from ``start_at(goal stamp)`` (goals with no known start are skipped); ``seed`` >= 0.
+
+    With ``first_path`` each query stops at its first path to the goal (reachability at a fraction of the cost).
+    """
     plan_grid = planning_grid(grid)
-    config = RRTStarConfig(iterations=iterations, time_budget=None)
+    config = RRTStarConfig(iterations=iterations, time_budget=None, stop_at_first=first_path)
     plans = []
     for i, goal in enumerate(goals):
         start = start_at(goal.stamp)

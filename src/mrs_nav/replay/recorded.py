@@ -35,7 +35,7 @@ class RecordedSession:
 
     final_map: OccupancyGrid | None = None
     goals: list[Goal] = field(default_factory=list)
-    path_lengths_m: list[float] = field(default_factory=list)
+    paths: list[tuple[float, float]] = field(default_factory=list)  # (stamp s, length m) of each /path
     map_to_odom: PoseTrack = field(default_factory=lambda: PoseTrack(tolerance=float("inf")))
     odom: PoseTrack = field(default_factory=PoseTrack)
 
@@ -79,7 +79,7 @@ def read_recorded(bag: Path, map_frame: str = "map", odom_frame: str = "odom") -
             session.goals.append(Goal(stamp_of(msg), _pose(msg.pose)))
         elif topic == topics.PATH:
             points = [[p.pose.position.x, p.pose.position.y] for p in msg.poses]
-            session.path_lengths_m.append(path_length(np.asarray(points).reshape(-1, 2)) if points else 0.0)
+            session.paths.append((stamp_of(msg), path_length(np.asarray(points).reshape(-1, 2)) if points else 0.0))
         elif topic == topics.ODOM:
             session.odom.add(stamp_of(msg), pose_from_odometry(msg))
         else:

@@ -7,7 +7,8 @@ fit) and ``rpe_trans_mean_m``/``rpe_rot_mean_deg``; against the recorded ``/map`
 ``map_iou`` and ``map_iou_1cell`` (:mod:`mrs_nav.replay.map_compare`); against the recorded live SLAM pose
 (``/tf`` map->odom * ``/odom``) ``slam_vs_recorded_rms_m`` (RMS position difference at the processed scans); and
 with planning, ``goals``, ``goals_reachable`` (on the replayed map), ``goals_reachable_recorded_map`` and
-``plan_length_ratio_mean`` (replanned length over the recorded ``/path`` length, where both exist).
+``plan_length_ratio_mean`` (length planned on the replayed map over that planned on the recorded map, same
+start and seed, where both succeed).
 """
 
 from __future__ import annotations
@@ -38,10 +39,11 @@ Metrics = dict[str, float | int | None]
 
 @dataclass(frozen=True)
 class PlanOptions:
-    """Re-planning budget (RRT* iterations per goal) and seed (goal ``i`` uses ``seed + i``)."""
+    """Re-planning budget (RRT* iterations per query), seed, and whether to stop at the first path."""
 
     iterations: int = 1500
     seed: int = 0
+    first_path: bool = False
 
 
 @dataclass
@@ -97,20 +99,24 @@ def replay_session(
         track = PoseTrack(tolerance=math.inf)
         for stamp, pose in zip(slam.stamps, poses, strict=True):
             track.add(stamp, pose)
-        session.plans = replan_goals(grid, recorded.goals, track.at, iterations=plan.iterations, seed=plan.seed)
+
+        def plan_on(map_: OccupancyGrid) -> list[GoalPlan]:
+            return replan_goals(
+                map_, recorded.goals, track.at, iterations=plan.iterations, seed=plan.seed, first_path=plan.first_path
+            )
+
+        session.plans = plan_on(grid)
         metrics["goals"] = len(recorded.goals)
         metrics["goals_reachable"] = sum(p.result.success for p in session.plans)
         if recorded.final_map is not None:
-            session.plans_on_recorded_map = replan_goals(
-                recorded.final_map, recorded.goals, track.at, iterations=plan.iterations, seed=plan.seed
-            )
+            session.plans_on_recorded_map = plan_on(recorded.final_map)
             metrics["goals_reachable_recorded_map"] = sum(p.result.success for p in session.plans_on_recorded_map)
         else:
             metrics["goals_reachable_recorded_map"] = None
         ratios = [
-            p.result.length_m / recorded_length
-            for p, recorded_length in zip(session.plans, recorded.path_lengths_m, strict=False)
-            if p.result.success and recorded_length > 0.0
+            mine.result.length_m / theirs.result.length_m
+            for mine, theirs in zip(session.plans, session.plans_on_recorded_map, strict=False)
+            if mine.result.success and theirs.result.success and theirs.result.length_m > 0.0
         ]
         metrics["plan_length_ratio_mean"] = float(np.mean(ratios)) if ratios else None
     session.metrics = {k: _rounded(v) for k, v in metrics.items()}
@@ -145,7 +151,7 @@ def plans_json(session: SessionReplay) -> dict[str, Any]:
     return {
         "replayed_map": [entry(p) for p in session.plans],
         "recorded_map": [entry(p) for p in session.plans_on_recorded_map],
-        "recorded_path_lengths_m": [round(v, 4) for v in session.recorded.path_lengths_m],
+        "recorded_paths": [[round(t, 6), round(length, 4)] for t, length in session.recorded.paths],
     }
 
 
