@@ -90,7 +90,8 @@ class ZenohBridgeNode:
         self._definitions: dict[str, tuple[str, str]] = {}  # ROS type -> (md5, full definition)
         self._inbound: dict[str, _Inbound] = {}
         self._zenoh_entities: list[Any] = []
-        self._timer: rospy.Timer | None = None
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
         self._session_errors = RateLimiter(1.0 / DROP_LOG_PERIOD)
 
     # --- life cycle -------------------------------------------------------------------------------------
@@ -101,8 +102,10 @@ class ZenohBridgeNode:
                 raise MrsNavError(f"inbound {rule.topic}: message type {rule.type} is not installed")
             self._inbound[rule.topic] = _Inbound(rospy.Publisher(rule.topic, msg_class, queue_size=10), msg_class)
         self._tick()
-        # A wall-clock timer: discovery must go on when /clock stops (or before it starts).
-        self._timer = rospy.Timer(rospy.Duration(self.config.discovery_period), lambda _: self._tick())
+        # A wall-clock loop, not rospy.Timer: discovery and reconnection must go on when /clock is absent
+        # or stopped (use_sim_time with no simulator running yet).
+        self._thread = threading.Thread(target=self._loop, name="zenoh_bridge_discovery", daemon=True)
+        self._thread.start()
         rospy.on_shutdown(self.close)
         rospy.loginfo(
             "zenoh bridge: prefix %s, %s on listen=%s connect=%s, inbound %s",
@@ -110,9 +113,12 @@ class ZenohBridgeNode:
             self.validator.allowed_topics() or "none",
         )  # fmt: skip
 
+    def _loop(self) -> None:
+        while not self._stop.wait(self.config.discovery_period) and not rospy.is_shutdown():
+            self._tick()
+
     def close(self) -> None:
-        if self._timer is not None:
-            self._timer.shutdown()
+        self._stop.set()
         with self._lock:
             for out in self._outbound.values():
                 if out.subscriber is not None:
