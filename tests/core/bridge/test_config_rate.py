@@ -40,8 +40,10 @@ def test_mapping_with_filters_rates_and_inbound() -> None:
     assert config.listen == ("tcp/127.0.0.1:1234", "tcp/127.0.0.1:1235")
     assert config.key_prefix == "mrs_nav/r1"
     assert config.layout is KeyLayout.ZENOH_BRIDGE_ROS1
-    assert config.topics.accepts("/odom") and config.topics.accepts("/scan")
-    assert not config.topics.accepts("/odom_raw") and not config.topics.accepts("/map")
+    assert config.topics.accepts("/odom")
+    assert config.topics.accepts("/scan")
+    assert not config.topics.accepts("/odom_raw")
+    assert not config.topics.accepts("/map")
     assert (config.max_rate("/scan"), config.max_rate("/odometry"), config.max_rate("/map")) == (5.0, 20.0, 1.0)
     assert config.inbound_rule("/move_base_simple/goal") == InboundRule(
         "/move_base_simple/goal", "geometry_msgs/PoseStamped", "map"

@@ -122,7 +122,8 @@ def test_monitor_discovers_decodes_and_gets_the_latched_map_late(
     assert odom_stats.rate_hz(odom_stats.arrivals[-1]) > 20  # sent at ~100 Hz
     assert odom_stats.rate_hz(odom_stats.arrivals[-1] + 10.0) == 0.0  # silent for long: shown as stopped
     text = render(summary)
-    assert "4 x 3 cells" in text and "/odom" in text
+    assert "4 x 3 cells" in text
+    assert "/odom" in text
     png = draw_snapshot(tmp_path / "snap.png", grid(), odom)
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
