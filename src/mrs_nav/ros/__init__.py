@@ -1,1 +1,1 @@
-"""ROS adapters: message conversion and one ``<Thing>Node`` class per node; the only code importing rospy."""
+"""ROS 1 adapters: message conversions and one node class per node. The only code importing rospy and tf2."""
