@@ -172,8 +172,9 @@ class ZenohBridgeNode:
                 self._definitions.setdefault(type_name, (msg_class._md5sum, msg_class._full_text))
             with self._lock:
                 self._outbound[topic] = out
+            # tcp_nodelay: without it Nagle's algorithm holds small messages (odometry) for milliseconds.
             out.subscriber = rospy.Subscriber(
-                topic, rospy.AnyMsg, self._on_ros_message, callback_args=out, queue_size=100
+                topic, rospy.AnyMsg, self._on_ros_message, callback_args=out, queue_size=100, tcp_nodelay=True
             )
 
     def _on_ros_message(self, msg: rospy.AnyMsg, out: _Outbound) -> None:
@@ -213,11 +214,13 @@ class ZenohBridgeNode:
                     session,
                     key,
                     encoding=encoding,
+                    express=True,
                     cache=zenoh.ext.CacheConfig(max_samples=1),
                     publisher_detection=True,
                 )
             else:
-                out.publisher = session.declare_publisher(key, encoding=encoding)
+                # express: sent at once rather than batched with later samples (latency over throughput).
+                out.publisher = session.declare_publisher(key, encoding=encoding, express=True)
             out.token = session.liveliness().declare_token(topic_key(self.prefix, out.topic))
             out.type, out.md5 = type_name, md5
 

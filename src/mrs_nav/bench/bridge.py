@@ -1,0 +1,185 @@
+"""Zenoh bridge: latency added over a direct ROS subscriber, loss and CPU at /odom 100 Hz + /scan 5 Hz + /map 1 Hz.
+
+Starts its own roscore and zenoh_bridge on free loopback ports (multicast scouting off), a ROS peer
+(:mod:`mrs_nav.ros.bridge_bench_peer`) that publishes the load and subscribes to it directly, and a Zenoh
+subscriber here. For every message (matched by ``header.seq``, the first 4 bytes of the payload) the added
+latency is the Zenoh receive time minus the direct ROS subscriber's receive time, both wall clock on this
+machine. The bridge's CPU use is its process's user + system time over the run, in % of one core.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import xmlrpc.client
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mrs_nav.bench.results import markdown_table
+from mrs_nav.bridge.session import open_client_session
+from mrs_nav.errors import MrsNavError
+
+CHECKOUT = Path(__file__).resolve().parents[3]
+TOPICS = {"/odom": 100.0, "/scan": 5.0, "/map": 1.0}
+TARGET_P50_MS, TARGET_P99_MS = 1.0, 5.0
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--duration", type=float, default=60.0, help="measured seconds (default 60)")
+
+
+def _free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+def _stop(proc: subprocess.Popen[bytes]) -> None:
+    if proc.poll() is None:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGINT)
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            proc.wait(timeout=10)
+    with contextlib.suppress(ProcessLookupError):
+        os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait(timeout=5)
+
+
+def _cpu_seconds(pid: int) -> float:
+    """User + system CPU time (s) of process ``pid`` from /proc."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+class _Receiver:
+    """Zenoh receive times (wall clock, s) per topic and header.seq."""
+
+    def __init__(self) -> None:
+        self.times: dict[str, dict[int, float]] = {t: {} for t in TOPICS}
+        self.lock = threading.Lock()
+
+    def __call__(self, sample: Any) -> None:
+        now = time.time()
+        topic = "/" + str(sample.key_expr).split("/", 1)[1]
+        seq = int.from_bytes(sample.payload.to_bytes()[:4], "little")
+        with self.lock:
+            if topic in self.times:
+                self.times[topic][seq] = now
+
+
+def run(args: argparse.Namespace) -> str:
+    if args.duration <= 0:
+        raise MrsNavError(f"--duration {args.duration}: expected seconds > 0")
+    with tempfile.TemporaryDirectory(prefix="mrs_nav_bench_bridge_") as tmp:
+        return _measure(Path(tmp), args.duration)
+
+
+def _measure(tmp: Path, duration: float) -> str:
+    ros_port, zenoh_port = _free_port(), _free_port()
+    endpoint = f"tcp/127.0.0.1:{zenoh_port}"
+    env = dict(os.environ)
+    env.update(
+        ROS_MASTER_URI=f"http://127.0.0.1:{ros_port}",
+        ROS_PACKAGE_PATH=str(CHECKOUT),
+        ROS_HOME=str(tmp),
+        ROS_LOG_DIR=str(tmp),
+        ROS_IP="127.0.0.1",
+        PATH=f"{Path(sys.executable).parent}:{env.get('PATH', '')}",
+        PYTHONPATH=f"{CHECKOUT / 'src'}:{env.get('PYTHONPATH', '')}".rstrip(":"),
+    )
+    config = tmp / "bridge.yaml"
+    config.write_text(json.dumps({"listen": [endpoint], "discovery_period": 0.2}))
+    procs: list[subprocess.Popen[bytes]] = []
+
+    def spawn(cmd: list[str], name: str) -> subprocess.Popen[bytes]:
+        with (tmp / f"{name}.log").open("wb") as log:
+            proc = subprocess.Popen(cmd, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+        procs.append(proc)
+        return proc
+
+    receiver = _Receiver()
+    session = None
+    try:
+        spawn(["roscore", "-p", str(ros_port)], "roscore")
+        _wait_master(env["ROS_MASTER_URI"])
+        bridge = spawn(
+            [sys.executable, str(CHECKOUT / "scripts" / "zenoh_bridge"), f"_config_file:={config}"], "zenoh_bridge"
+        )
+        session = open_client_session([endpoint])
+        subscriber = session.declare_subscriber("mrs_nav/**", receiver)
+        out = tmp / "peer.json"
+        peer = spawn(
+            [sys.executable, "-m", "mrs_nav.ros.bridge_bench_peer", "--out", str(out), "--duration", str(duration)],
+            "peer",
+        )
+        cpu0, wall0 = _cpu_seconds(bridge.pid), time.monotonic()
+        try:
+            peer.wait(timeout=duration + 120)
+        except subprocess.TimeoutExpired:
+            raise MrsNavError(f"bench bridge: the ROS peer did not finish; see {tmp}/peer.log") from None
+        cpu = (_cpu_seconds(bridge.pid) - cpu0) / (time.monotonic() - wall0) * 100
+        if peer.returncode != 0 or not out.exists():
+            log = (tmp / "peer.log").read_text(errors="replace")[-2000:]
+            raise MrsNavError(f"bench bridge: the ROS peer failed ({peer.returncode}):\n{log}")
+        report = json.loads(out.read_text())
+        subscriber.undeclare()  # type: ignore[no-untyped-call]
+    finally:
+        if session is not None:
+            session.close()  # type: ignore[no-untyped-call]
+        for proc in reversed(procs):
+            _stop(proc)
+    return _report(report, receiver.times, cpu, duration)
+
+
+def _wait_master(uri: str) -> None:
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        with contextlib.suppress(OSError):
+            answer: Any = xmlrpc.client.ServerProxy(uri).getPid("/bench")
+            if answer[0] == 1:
+                return
+        time.sleep(0.1)
+    raise MrsNavError(f"bench bridge: no ROS master answered on {uri}")
+
+
+def _report(report: dict[str, Any], zenoh_times: dict[str, dict[int, float]], cpu: float, duration: float) -> str:
+    rows: list[list[object]] = []
+    all_added: list[float] = []
+    lost_total = 0
+    for topic, rate in TOPICS.items():
+        sent = report[topic]["sent"]
+        direct = {int(k): v for k, v in report[topic]["direct"].items()}
+        via_zenoh = zenoh_times[topic]
+        lost = sum(seq not in via_zenoh for seq in sent)
+        lost_total += lost
+        added = np.array([(via_zenoh[s] - direct[s]) * 1e3 for s in sent if s in via_zenoh and s in direct])
+        all_added.extend(added.tolist())
+        p50, p99, worst = np.percentile(added, [50, 99, 100]) if added.size else (np.nan,) * 3
+        rows.append(
+            [topic, f"{rate:g}", len(sent), sum(s in direct for s in sent), len(sent) - lost, lost, p50, p99, worst]
+        )
+    overall = np.array(all_added)
+    p50, p99 = np.percentile(overall, [50, 99]) if overall.size else (np.nan, np.nan)
+    table = markdown_table(
+        ["topic", "Hz", "sent", "direct ROS got", "Zenoh got", "lost", "added p50 ms", "added p99 ms", "added max ms"],
+        rows,
+    )
+    verdict = "meets" if p50 <= TARGET_P50_MS and p99 <= TARGET_P99_MS and lost_total == 0 else "MISSES"
+    return (
+        f"{duration:g} s measured after a 1 s warm-up; added latency = Zenoh receive time minus a direct rospy "
+        f"subscriber's receive time for the same message (loopback, one machine, peer mode).\n\n{table}\n\n"
+        f"All topics: added latency p50 {p50:.3f} ms, p99 {p99:.3f} ms; {lost_total} lost; bridge CPU "
+        f"{cpu:.1f} % of one core (load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores). Target p50 <= {TARGET_P50_MS:g} ms, p99 <= {TARGET_P99_MS:g} ms, zero loss: "
+        f"**{verdict}**.\n"
+    )
