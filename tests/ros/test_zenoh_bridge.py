@@ -170,10 +170,24 @@ class Ticker:
         self.pub.unregister()
 
 
+# Runs mrs-nav in a process where ROS cannot be imported: the monitor must work on a machine without ROS.
+_WITHOUT_ROS = """
+import sys
+class Block:
+    def find_spec(self, name, path=None, target=None):
+        root = name.split('.')[0]
+        if root in ('rospy', 'roslib', 'genpy', 'rosgraph', 'tf2_ros') or root.endswith('_msgs'):
+            raise ImportError('the monitor imported ' + name)
+sys.meta_path.insert(0, Block())
+from mrs_nav.cli.main import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
 def mrs_nav(*args: str) -> subprocess.CompletedProcess[str]:
-    """Run this checkout's ``mrs-nav`` (not whichever one is installed) in a process without ROS."""
+    """Run this checkout's ``mrs-nav`` (not whichever one is installed), with ROS imports blocked."""
     env = {**os.environ, "PYTHONPATH": str(REPO / "src")}
-    cmd = [sys.executable, "-m", "mrs_nav", *args]
+    cmd = [sys.executable, "-c", _WITHOUT_ROS, *args]
     return subprocess.run(cmd, capture_output=True, text=True, timeout=60, check=False, env=env)
 
 
