@@ -27,7 +27,7 @@ from roslib.message import get_message_class
 
 from mrs_nav.bridge.config import BridgeConfig
 from mrs_nav.bridge.inbound import InboundValidator
-from mrs_nav.bridge.keys import topic_key, topic_of_publish_key, types_key
+from mrs_nav.bridge.keys import check_topic, topic_key, topic_of_publish_key, types_key
 from mrs_nav.bridge.rate_limit import RateLimiter
 from mrs_nav.bridge.session import open_session
 from mrs_nav.bridge.wire import encode_attachment, encode_definition, encoding_text, schema_of
@@ -89,6 +89,7 @@ class ZenohBridgeNode:
         self._outbound: dict[str, _Outbound] = {}
         self._definitions: dict[str, tuple[str, str]] = {}  # ROS type -> (md5, full definition)
         self._inbound: dict[str, _Inbound] = {}
+        self._unbridgeable: set[str] = set()
         self._zenoh_entities: list[Any] = []
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -164,7 +165,13 @@ class ZenohBridgeNode:
             rospy.logwarn_throttle(DROP_LOG_PERIOD, f"zenoh bridge: cannot list topics: {err}")
             return
         for topic, type_name in published:
-            if topic in self._outbound or not self.config.topics.accepts(topic):
+            if topic in self._outbound or topic in self._unbridgeable or not self.config.topics.accepts(topic):
+                continue
+            try:
+                check_topic(topic)
+            except MrsNavError as err:  # e.g. a name with characters Zenoh keys cannot hold
+                self._unbridgeable.add(topic)
+                rospy.logwarn("zenoh bridge: not bridging %s: %s", topic, err)
                 continue
             out = _Outbound(topic, type_name, RateLimiter(self.config.max_rate(topic)))
             msg_class = get_message_class(type_name)
