@@ -21,6 +21,7 @@ def draw_snapshot(out: Path, grid: Any = None, odom: Any = None, path: Any = Non
     # A bare Figure (no pyplot) renders with Agg and leaves the global backend alone.
     fig = Figure(figsize=(6, 6), dpi=100)
     ax = fig.subplots()
+    ax.set_facecolor("#cfd8e3")  # outside the map, so that free (white) cells stand out
     if grid is not None:
         info = grid.info
         cells = np.asarray(grid.data, dtype=float).reshape(info.height, info.width)
