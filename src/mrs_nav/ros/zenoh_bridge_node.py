@@ -196,7 +196,11 @@ class ZenohBridgeNode:
         if session is None:
             return
         if out.publisher is None:
-            self._declare_outbound(session, out, header)
+            try:
+                self._declare_outbound(session, out, header)
+            except (zenoh.ZError, MrsNavError) as err:
+                rospy.logwarn_throttle(DROP_LOG_PERIOD, f"zenoh bridge: cannot bridge {out.topic}: {err}")
+                return
         if not out.md5:
             return
         try:
