@@ -10,50 +10,29 @@ machine. The bridge's CPU use is its process's user + system time over the run, 
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
 import os
-import signal
-import socket
 import subprocess
 import sys
 import tempfile
 import threading
 import time
-import xmlrpc.client
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from mrs_nav.bench.results import markdown_table
+from mrs_nav.bench.ros_processes import CHECKOUT, RosProcessError, free_port, process, roscore
 from mrs_nav.bridge.session import open_client_session
 from mrs_nav.errors import MrsNavError
 
-CHECKOUT = Path(__file__).resolve().parents[3]
 TOPICS = {"/odom": 100.0, "/scan": 5.0, "/map": 1.0}
 TARGET_P50_MS, TARGET_P99_MS = 1.0, 5.0
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--duration", type=float, default=60.0, help="measured seconds (default 60)")
-
-
-def _free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
-
-
-def _stop(proc: subprocess.Popen[bytes]) -> None:
-    if proc.poll() is None:
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(proc.pid, signal.SIGINT)
-        with contextlib.suppress(subprocess.TimeoutExpired):
-            proc.wait(timeout=10)
-    with contextlib.suppress(ProcessLookupError):
-        os.killpg(proc.pid, signal.SIGKILL)
-    proc.wait(timeout=5)
 
 
 def _cpu_seconds(pid: int) -> float:
@@ -86,71 +65,31 @@ def run(args: argparse.Namespace) -> str:
 
 
 def _measure(tmp: Path, duration: float) -> str:
-    ros_port, zenoh_port = _free_port(), _free_port()
-    endpoint = f"tcp/127.0.0.1:{zenoh_port}"
-    env = dict(os.environ)
-    env.update(
-        ROS_MASTER_URI=f"http://127.0.0.1:{ros_port}",
-        ROS_PACKAGE_PATH=str(CHECKOUT),
-        ROS_HOME=str(tmp),
-        ROS_LOG_DIR=str(tmp),
-        ROS_IP="127.0.0.1",
-        PATH=f"{Path(sys.executable).parent}:{env.get('PATH', '')}",
-        PYTHONPATH=f"{CHECKOUT / 'src'}:{env.get('PYTHONPATH', '')}".rstrip(":"),
-    )
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
     config = tmp / "bridge.yaml"
     config.write_text(json.dumps({"listen": [endpoint], "discovery_period": 0.2}))
-    procs: list[subprocess.Popen[bytes]] = []
-
-    def spawn(cmd: list[str], name: str) -> subprocess.Popen[bytes]:
-        with (tmp / f"{name}.log").open("wb") as log:
-            proc = subprocess.Popen(cmd, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
-        procs.append(proc)
-        return proc
-
     receiver = _Receiver()
-    session = None
-    try:
-        spawn(["roscore", "-p", str(ros_port)], "roscore")
-        _wait_master(env["ROS_MASTER_URI"])
-        bridge = spawn(
-            [sys.executable, str(CHECKOUT / "scripts" / "zenoh_bridge"), f"_config_file:={config}"], "zenoh_bridge"
-        )
-        session = open_client_session([endpoint])
-        subscriber = session.declare_subscriber("mrs_nav/**", receiver)
-        out = tmp / "peer.json"
-        peer = spawn(
-            [sys.executable, "-m", "mrs_nav.ros.bridge_bench_peer", "--out", str(out), "--duration", str(duration)],
-            "peer",
-        )
-        cpu0, wall0 = _cpu_seconds(bridge.pid), time.monotonic()
-        try:
-            peer.wait(timeout=duration + 120)
-        except subprocess.TimeoutExpired:
-            raise MrsNavError(f"bench bridge: the ROS peer did not finish; see {tmp}/peer.log") from None
-        cpu = (_cpu_seconds(bridge.pid) - cpu0) / (time.monotonic() - wall0) * 100
-        if peer.returncode != 0 or not out.exists():
-            log = (tmp / "peer.log").read_text(errors="replace")[-2000:]
-            raise MrsNavError(f"bench bridge: the ROS peer failed ({peer.returncode}):\n{log}")
-        report = json.loads(out.read_text())
-        subscriber.undeclare()  # type: ignore[no-untyped-call]
-    finally:
-        if session is not None:
-            session.close()  # type: ignore[no-untyped-call]
-        for proc in reversed(procs):
-            _stop(proc)
-    return _report(report, receiver.times, cpu, duration)
-
-
-def _wait_master(uri: str) -> None:
-    deadline = time.monotonic() + 30
-    while time.monotonic() < deadline:
-        with contextlib.suppress(OSError):
-            answer: Any = xmlrpc.client.ServerProxy(uri).getPid("/bench")
-            if answer[0] == 1:
-                return
-        time.sleep(0.1)
-    raise MrsNavError(f"bench bridge: no ROS master answered on {uri}")
+    with roscore(tmp) as env:
+        bridge_cmd = [sys.executable, str(CHECKOUT / "scripts" / "zenoh_bridge"), f"_config_file:={config}"]
+        with process(bridge_cmd, env, tmp / "zenoh_bridge.log") as bridge:
+            session = open_client_session([endpoint])
+            try:
+                session.declare_subscriber("mrs_nav/**", receiver)
+                out = tmp / "peer.json"
+                peer_cmd = [sys.executable, "-m", "mrs_nav.ros.bridge_bench_peer", "--out", str(out)]
+                with process([*peer_cmd, "--duration", str(duration)], env, tmp / "peer.log") as peer:
+                    cpu0, wall0 = _cpu_seconds(bridge.pid), time.monotonic()
+                    try:
+                        peer.wait(timeout=duration + 120)
+                    except subprocess.TimeoutExpired:
+                        raise RosProcessError("bench bridge: the ROS peer did not finish in time") from None
+                    cpu = (_cpu_seconds(bridge.pid) - cpu0) / (time.monotonic() - wall0) * 100
+            finally:
+                session.close()  # type: ignore[no-untyped-call]
+            if peer.returncode != 0 or not out.exists():
+                log = (tmp / "peer.log").read_text(errors="replace")[-2000:]
+                raise RosProcessError(f"bench bridge: the ROS peer failed ({peer.returncode}):\n{log}")
+    return _report(json.loads(out.read_text()), receiver.times, cpu, duration)
 
 
 def _report(report: dict[str, Any], zenoh_times: dict[str, dict[int, float]], cpu: float, duration: float) -> str:
