@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from mrs_nav.bridge.config import BridgeConfig
 from mrs_nav.bridge.decoder import MessageDecoder, first_non_finite, noetic_store
@@ -92,3 +95,38 @@ def test_a_wrong_md5_is_refused(validator: InboundValidator) -> None:
 def test_nothing_is_allowed_in_by_default() -> None:
     with pytest.raises(InvalidInputError, match=r"allowed: nothing"):
         InboundValidator(BridgeConfig()).validate(GOAL, POSE_STAMPED, serialize_goal(0, 0, 0))
+
+
+def accepted_or_refused(validator: InboundValidator, schema: str, payload: bytes, attachment: bytes | None) -> Any:
+    """The accepted message, or None when refused with InvalidInputError; any other exception fails the test."""
+    try:
+        return validator.validate(GOAL, schema, payload, attachment)
+    except InvalidInputError:
+        return None
+
+
+@given(
+    st.binary(max_size=200),
+    st.sampled_from([POSE_STAMPED, "geometry_msgs/Twist", "", "x"]),
+    st.one_of(st.none(), st.binary(max_size=30)),
+)
+def test_arbitrary_network_input_is_refused_cleanly(payload: bytes, schema: str, attachment: bytes | None) -> None:
+    msg = accepted_or_refused(
+        InboundValidator(BridgeConfig.from_mapping({"inbound": [GOAL]})), schema, payload, attachment
+    )
+    if msg is not None:  # whatever passes is a well-formed, finite goal in the map frame
+        assert msg.header.frame_id == "map"
+        assert first_non_finite(msg) is None
+
+
+@given(st.binary(min_size=1, max_size=300))
+def test_a_corrupted_goal_is_accepted_only_if_it_is_still_valid(noise: bytes) -> None:
+    payload = bytearray(serialize_goal(1.0, 2.0, 0.3))
+    for i, b in enumerate(noise[: len(payload)]):
+        payload[i] ^= b
+    msg = accepted_or_refused(
+        InboundValidator(BridgeConfig.from_mapping({"inbound": [GOAL]})), POSE_STAMPED, bytes(payload), None
+    )
+    if msg is not None:
+        assert msg.header.frame_id == "map"
+        assert first_non_finite(msg) is None
