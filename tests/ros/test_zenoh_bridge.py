@@ -212,15 +212,17 @@ def test_a_malformed_payload_is_dropped_with_a_log_line_and_the_bridge_keeps_run
     routed: Bridge, rospy_node: Any
 ) -> None:
     goals, sub = goal_recorder(rospy_node)
-    encoding = zenoh.Encoding(encoding_text("geometry_msgs/PoseStamped"))
     session = open_client_session([routed.endpoint], mode="client")
     try:
-        wait_for(lambda: sub.get_num_connections() > 0, 15, "the bridge's goal publisher")
-        time.sleep(0.3)  # let the bridge's subscription reach this fresh session through the router
+        pub = session.declare_publisher(
+            "mrs_nav/move_base_simple/goal", encoding=zenoh.Encoding(encoding_text("geometry_msgs/PoseStamped"))
+        )
+        wait_for(lambda: sub.get_num_connections() > 0, 15, "the bridge's goal publisher in ROS")
+        wait_for(lambda: pub.matching_status.matching, 15, "the bridge's goal subscriber on Zenoh")
         for junk in (b"\x00garbage", serialize_goal(float("nan"), 0, 0), serialize_goal(1, 1, 0, frame="odom")):
-            session.put("mrs_nav/move_base_simple/goal", junk, encoding=encoding)
+            pub.put(junk)
         wait_for(lambda: "dropped remote message on /move_base_simple/goal" in routed.log(), 10, "the drop log line")
-        session.put("mrs_nav/move_base_simple/goal", serialize_goal(0.5, 0.25, 0.0), encoding=encoding)
+        pub.put(serialize_goal(0.5, 0.25, 0.0))
         wait_for(lambda: len(goals) >= 1, 10, "a valid goal after the malformed ones")
     finally:
         session.close()
