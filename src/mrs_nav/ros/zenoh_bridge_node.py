@@ -6,8 +6,9 @@ Encoding schema and the md5 + receive time in the attachment (:mod:`mrs_nav.brid
 (the map) go through an advanced publisher whose cache answers late joiners. Inbound, only allow-listed
 topics are listened to, and :class:`mrs_nav.bridge.inbound.InboundValidator` checks each message first.
 
-The Zenoh side never blocks ROS: puts drop under congestion, a session that cannot open is retried from the
-discovery timer, and Zenoh's own connection retries find a restarted peer or router.
+The Zenoh side never holds ROS up for long: a put waits at most 50 ms for a congested link and is then
+dropped, a session that cannot open is retried by the discovery loop, and Zenoh's own connection retries find
+a restarted peer or router.
 """
 
 from __future__ import annotations
