@@ -9,16 +9,14 @@ import threading
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pytest
 from rosbags.rosbag1 import Reader, Writer
 
 from mrs_nav.bag import topics
 from mrs_nav.bag.io import typestore
 from mrs_nav.cli.replay import parse_params
-from mrs_nav.geometry import yaw_from_quaternion
-from mrs_nav.occupancy_grid import OccupancyGrid
 from mrs_nav.replay.map_compare import compare_maps
+from mrs_nav.replay.recorded import grid_from_message
 from mrs_nav.replay.session_replay import replayed_map
 from mrs_nav.replay.slam_replay import replay_slam
 from tests.rosharness import RosMaster, stop, wait_for
@@ -52,15 +50,6 @@ def _sensor_bag(source: Path, target: Path) -> None:
                 raw = store.serialize_ros1(msg, conn.msgtype)
             writer.write(added[conn.topic], stamp, raw)
         writer.close()
-
-
-def _grid(msg: Any) -> OccupancyGrid:
-    info = msg.info
-    o, q = info.origin.position, info.origin.orientation
-    yaw = yaw_from_quaternion(q.x, q.y, q.z, q.w)
-    return OccupancyGrid.from_message_data(
-        np.asarray(msg.data), info.width, info.height, info.resolution, (o.x, o.y, yaw)
-    )
 
 
 def test_rosbag_play_into_the_slam_node_agrees_with_offline_replay(
@@ -109,7 +98,7 @@ def test_rosbag_play_into_the_slam_node_agrees_with_offline_replay(
     finally:
         sub.unregister()
     with lock:
-        live = _grid(maps[-1])
+        live = grid_from_message(maps[-1])
     agreement = compare_maps(live, offline)
     assert agreement.iou >= 0.95, agreement
     assert agreement.common_known_cells > 1000
