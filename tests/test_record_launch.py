@@ -38,7 +38,7 @@ def test_session_launch_files_include_recording_on_request():
         root = ET.parse(path).getroot()
         includes = [i for i in root.iter("include") if i.get("file", "").endswith("record.launch")]
         passes = any(
-            i.get("file", "").endswith("simulation.launch")
+            i.get("file", "").endswith(("simulation.launch", "slam.launch"))
             and {a.get("name") for a in i.iter("arg")} >= {"record", "bag"}
             for i in root.iter("include")
         )
