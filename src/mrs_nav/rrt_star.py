@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -222,10 +223,18 @@ class _Planner:
 
 
 def grow_rrt_star(
-    start: Pose2D, goal: FloatArray, grid: OccupancyGrid, config: RRTStarConfig, rng: np.random.Generator
+    start: Pose2D,
+    goal: FloatArray,
+    grid: OccupancyGrid,
+    config: RRTStarConfig,
+    rng: np.random.Generator,
+    *,
+    clock: Callable[[], float] = time.perf_counter,
 ) -> Search:
-    """Run RRT* from ``start`` to ``goal`` (x, y) on ``grid`` (inflated); the result, tree and improvements."""
-    t0 = time.perf_counter()
+    """Run RRT* from ``start`` to ``goal`` (x, y) on ``grid`` (inflated); the result, tree and improvements.
+
+    Times and the budget are read from ``clock`` (wall time by default)."""
+    t0 = clock()
     goal = np.asarray(goal, dtype=np.float64)[:2]
     check_query(grid, start, goal)
     planner = _Planner(start, goal, grid, config)
@@ -237,7 +246,7 @@ def grow_rrt_star(
     history: list[tuple[int, float, float]] = []
     first_s: float | None = None
     iteration = 0
-    while iteration < limit and time.perf_counter() < deadline:
+    while iteration < limit and clock() < deadline:
         iteration += 1
         if planner.goal_node < 0 and rng.random() < config.goal_bias:
             target = goal.copy()
@@ -258,12 +267,12 @@ def grow_rrt_star(
             length = path_length(path)
             if best_path is None or length < path_length(best_path):
                 best_path = path
-                now = time.perf_counter() - t0
+                now = clock() - t0
                 first_s = now if first_s is None else first_s
                 history.append((iteration, now, length))
             if config.stop_at_first:
                 break
-    elapsed = time.perf_counter() - t0
+    elapsed = clock() - t0
     if best_path is None:
         reason = "iteration budget used up" if iteration >= limit else "time budget used up"
         return Search(failed(start, elapsed, iteration, len(tree), f"no path found: {reason}"), tree, ())
