@@ -25,7 +25,7 @@ between two samples is then within half a resolution of a sample and so inside a
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -39,10 +39,12 @@ _MIN_CHORD = 1e-9
 _FORWARD_MARGIN = 1e-9
 
 
-@dataclass(frozen=True, eq=False)
-class Arcs:
+class Arcs(NamedTuple):
     """A batch of ``N`` arcs: start positions ``(N, 2)``, start yaws, half turns ``alpha``, chord lengths,
-    curvatures (1/m), lengths (m) and end yaws (rad, wrapped to [-pi, pi))."""
+    curvatures (1/m), lengths (m) and end yaws (rad, wrapped to [-pi, pi)).
+
+    A NamedTuple rather than a frozen dataclass: planners build several per iteration, and this is cheaper.
+    """
 
     start: FloatArray
     yaw: FloatArray
@@ -87,12 +89,14 @@ def feasible(arcs: Arcs, max_alpha: float = math.pi / 2, min_turning_radius: flo
     return ok
 
 
-def sample(arcs: Arcs, step: float, where: BoolArray | None = None) -> tuple[FloatArray, IntArray]:
+def sample(
+    arcs: Arcs, step: float, where: BoolArray | None = None, *, with_yaw: bool = True
+) -> tuple[FloatArray, IntArray]:
     """Poses ``(M, 3)`` along every arc at equal arc-length spacing of at most ``step`` metres, both ends included,
     and ``first (N + 1,)``: arc ``i``'s poses are rows ``first[i]:first[i + 1]``.
 
     Arcs where ``where`` is False get only their two end poses (callers ignore them; this keeps infeasible, long
-    arcs from costing samples).
+    arcs from costing samples). Without ``with_yaw`` the third column is left unset (collision checks).
     """
     segments = np.maximum(np.ceil(arcs.length / step - 1e-9), 1).astype(np.intp)
     if where is not None:
@@ -110,7 +114,8 @@ def sample(arcs: Arcs, step: float, where: BoolArray | None = None) -> tuple[Flo
     poses = np.empty((first[-1], 3), dtype=np.float64)
     poses[:, 0] = arcs.start[owner, 0] + chord * np.cos(heading)
     poses[:, 1] = arcs.start[owner, 1] + chord * np.sin(heading)
-    poses[:, 2] = (heading + half + np.pi) % (2.0 * np.pi) - np.pi
+    if with_yaw:
+        poses[:, 2] = (heading + half + np.pi) % (2.0 * np.pi) - np.pi
     return poses, first
 
 
@@ -121,7 +126,7 @@ def collision_free(arcs: Arcs, grid: OccupancyGrid, where: BoolArray | None = No
     """
     if len(arcs.length) == 0:
         return np.zeros(0, dtype=bool)
-    poses, first = sample(arcs, grid.resolution, where)
+    poses, first = sample(arcs, grid.resolution, where, with_yaw=False)
     free = grid.lookup(grid.conservative_free_mask, poses)
     ok: BoolArray = np.logical_and.reduceat(free, first[:-1])
     if where is not None:
@@ -170,12 +175,4 @@ def adjust_pose(
 def take(arcs: Arcs, index: npt.ArrayLike) -> Arcs:
     """The sub-batch of ``arcs`` at ``index`` (an index array or boolean mask)."""
     i = np.asarray(index)
-    return Arcs(
-        arcs.start[i],
-        arcs.yaw[i],
-        arcs.alpha[i],
-        arcs.chord[i],
-        arcs.curvature[i],
-        arcs.length[i],
-        arcs.end_yaw[i],
-    )
+    return Arcs(*(field[i] for field in arcs))

@@ -80,25 +80,35 @@ def default_gamma(grid: OccupancyGrid) -> float:
     return GAMMA_FACTOR * bound
 
 
-def sample_informed(
-    grid: OccupancyGrid, rng: np.random.Generator, start: FloatArray, goal: FloatArray, best: float
-) -> FloatArray:
-    """A free position uniform in the ellipse ``|x - start| + |x - goal| <= best`` (falls back to the map)."""
-    c_min = float(np.hypot(*(goal - start)))
-    a = best / 2.0
-    b = math.sqrt(max(best * best - c_min * c_min, 0.0)) / 2.0
-    angle = math.atan2(goal[1] - start[1], goal[0] - start[0])
-    rot = np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
-    centre = (start + goal) / 2.0
-    for _ in range(64):
-        r = np.sqrt(rng.random(32))
-        t = rng.random(32) * 2.0 * math.pi
-        points = (np.stack([a * r * np.cos(t), b * r * np.sin(t)], axis=1) @ rot.T) + centre
-        free = np.flatnonzero(grid.is_free(points))
-        if len(free):
-            out: FloatArray = points[free[0]]
-            return out
-    return sample_random_position(grid, rng)
+class InformedSampler:
+    """Free positions uniform in the ellipse ``|x - start| + |x - goal| <= best`` (Gammell et al.'s informed set).
+
+    The ellipse is fixed per best length, so its transform is built once per improvement, not per sample.
+    """
+
+    def __init__(self, grid: OccupancyGrid, start: FloatArray, goal: FloatArray, best: float) -> None:
+        self.grid = grid
+        c_min = float(np.hypot(*(goal - start)))
+        a = best / 2.0
+        b = math.sqrt(max(best * best - c_min * c_min, 0.0)) / 2.0
+        angle = math.atan2(goal[1] - start[1], goal[0] - start[0])
+        c, s = math.cos(angle), math.sin(angle)
+        # unit disk -> ellipse: scale by (a, b), rotate by angle
+        self.transform = np.array([[a * c, a * s], [-b * s, b * c]])
+        self.centre = (start + goal) / 2.0
+
+    def sample(self, rng: np.random.Generator) -> FloatArray:
+        """One free position in the ellipse (or anywhere free on the map if the ellipse shows none)."""
+        for _ in range(64):
+            r = np.sqrt(rng.random(32))
+            t = rng.random(32) * (2.0 * math.pi)
+            disk = np.stack([r * np.cos(t), r * np.sin(t)], axis=1)
+            points = disk @ self.transform + self.centre
+            free = np.flatnonzero(self.grid.is_free(points))
+            if len(free):
+                out: FloatArray = points[free[0]]
+                return out
+        return sample_random_position(self.grid, rng)
 
 
 class _Planner:
@@ -243,6 +253,7 @@ def grow_rrt_star(
     limit = config.iterations if config.iterations is not None else math.inf
     best_cost = math.inf
     best_path: FloatArray | None = None
+    informed: InformedSampler | None = None
     history: list[tuple[int, float, float]] = []
     first_s: float | None = None
     iteration = 0
@@ -250,8 +261,8 @@ def grow_rrt_star(
         iteration += 1
         if planner.goal_node < 0 and rng.random() < config.goal_bias:
             target = goal.copy()
-        elif config.informed and best_path is not None:
-            target = sample_informed(grid, rng, start.position, goal, best_cost)
+        elif informed is not None:
+            target = informed.sample(rng)
         else:
             target = sample_random_position(grid, rng)
         new = planner.extend(target)
@@ -263,6 +274,8 @@ def grow_rrt_star(
             # Arc cost and sampled-path length differ by the chords' sag (< 0.1 %): the kept path must be
             # shorter in the reported length too, so that the reported length never grows.
             best_cost = float(tree.cost[g])
+            if config.informed:
+                informed = InformedSampler(grid, start.position, goal, best_cost)
             path = tree.path_poses(tree.branch(g), grid.resolution)
             length = path_length(path)
             if best_path is None or length < path_length(best_path):
