@@ -10,21 +10,18 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
+import uuid
 import xmlrpc.client
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
+from mrs_nav.bench.ros_processes import TAG_VARIABLE, free_port, kill_tagged, process
+
 REPO = Path(__file__).resolve().parents[1]
-
-
-def free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
+__all__ = ["REPO", "RosMaster", "free_port", "ros_env", "stop", "wait_for"]
 
 
 def ros_env(master_uri: str, log_dir: Path) -> dict[str, str]:
@@ -71,7 +68,9 @@ class RosMaster:
         self.port = free_port()
         self.uri = f"http://127.0.0.1:{self.port}"
         self.log_dir = log_dir
-        self.env = ros_env(self.uri, log_dir)
+        # Everything started with this environment carries the tag, so close() finds what a test left behind.
+        self.tag = uuid.uuid4().hex
+        self.env = {**ros_env(self.uri, log_dir), TAG_VARIABLE: self.tag}
         self.proc = subprocess.Popen(
             ["roscore", "-p", str(self.port)],
             env=self.env,
@@ -92,22 +91,13 @@ class RosMaster:
 
     def close(self) -> None:
         stop(self.proc)
+        kill_tagged(self.tag)
 
     @contextlib.contextmanager
     def launch(self, launch_file: str, *args: str, name: str | None = None) -> Iterator[subprocess.Popen[bytes]]:
         """Run ``roslaunch mrs_nav LAUNCH_FILE ARGS`` for the duration of the ``with`` block."""
         log = self.log_dir / f"{name or Path(launch_file).stem}-{time.monotonic_ns()}.log"
-        with log.open("wb") as out:
-            proc = subprocess.Popen(
-                ["roslaunch", "--wait", "mrs_nav", launch_file, *args],
-                env=self.env,
-                start_new_session=True,
-                stdout=out,
-                stderr=subprocess.STDOUT,
-            )
-            try:
-                yield proc
-            finally:
-                stop(proc)
+        with process(["roslaunch", "--wait", "mrs_nav", launch_file, *args], self.env, log) as proc:
+            yield proc
         # Keep the launch log next to the failure: pytest shows it with -rA on error.
         print(f"roslaunch log: {log}")

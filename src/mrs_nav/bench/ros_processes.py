@@ -16,6 +16,7 @@ import socket
 import subprocess
 import sys
 import time
+import uuid
 import xmlrpc.client
 from collections.abc import Iterator
 from pathlib import Path
@@ -53,11 +54,42 @@ def ros_env(uri: str, log_dir: Path) -> dict[str, str]:
     return env
 
 
+# Every process started here carries a unique value of this variable, and so do the nodes roslaunch starts
+# from it: roslaunch puts each node in a session of its own, where a signal to roslaunch's group never
+# reaches, so leftovers are found by this tag instead.
+TAG_VARIABLE = "MRS_NAV_PROCESS_TAG"
+
+
+def kill_tagged(tag: str) -> list[int]:
+    """SIGKILL every process whose environment holds ``TAG_VARIABLE=tag``; returns their pids."""
+    needle = f"{TAG_VARIABLE}={tag}".encode()
+    killed = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            environ = (entry / "environ").read_bytes()
+        except OSError:
+            continue
+        if needle in environ.split(b"\0"):
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(int(entry.name), signal.SIGKILL)
+                killed.append(int(entry.name))
+    return killed
+
+
 @contextlib.contextmanager
-def process(args: list[str], env: dict[str, str], log: Path) -> Iterator[subprocess.Popen[bytes]]:
-    """A process in its own group, output to ``log``, SIGINTed (then killed) at the end of the block."""
+def process(args: list[str], env: dict[str, str], log: Path, grace: float = 20.0) -> Iterator[subprocess.Popen[bytes]]:
+    """A process in its own group, output to ``log``, for the block.
+
+    At the end it gets SIGINT (as Ctrl-C would; roslaunch then stops its nodes), ``grace`` seconds to exit,
+    then SIGKILL, and any process it left behind (found by its tag) is killed too.
+    """
+    tag = uuid.uuid4().hex
     with log.open("wb") as out:
-        proc = subprocess.Popen(args, env=env, start_new_session=True, stdout=out, stderr=subprocess.STDOUT)
+        proc = subprocess.Popen(
+            args, env={**env, TAG_VARIABLE: tag}, start_new_session=True, stdout=out, stderr=subprocess.STDOUT
+        )
         try:
             yield proc
         finally:
@@ -65,10 +97,11 @@ def process(args: list[str], env: dict[str, str], log: Path) -> Iterator[subproc
                 with contextlib.suppress(ProcessLookupError):
                     os.killpg(proc.pid, signal.SIGINT)
                 with contextlib.suppress(subprocess.TimeoutExpired):
-                    proc.wait(timeout=10)
+                    proc.wait(timeout=grace)
             with contextlib.suppress(ProcessLookupError):
                 os.killpg(proc.pid, signal.SIGKILL)
             proc.wait(timeout=5)
+            kill_tagged(tag)
 
 
 def wait_for_master(uri: str, timeout: float = 30.0) -> None:
