@@ -13,7 +13,7 @@ demo: install
 	$(VENV)/bin/mrs-nav figures --out $(OUT)/figures
 
 lint: install
-	$(VENV)/bin/ruff check src tests scripts
+	$(VENV)/bin/ruff check src tests $(wildcard scripts/*)
 	$(VENV)/bin/mypy
 
 # pytest exits 5 when it collected no test: that is a broken suite, not a pass.
