@@ -6,10 +6,10 @@ A :class:`Navigator` owns one goal at a time. It is fed the latest map (:meth:`N
 to publish when it has one, and events (goal accepted, refused, planned, reached, failed, ...).
 
 Planning (with any :class:`Planner`, RRT* by default in the nodes) happens on the map inflated by the robot
-radius. With ``allow_unknown`` (as move_base's option of that name) unknown cells count as free, so a goal in
-a room SLAM has not seen yet gets an optimistic plan that is repaired as the map reveals it. The cells within
-the robot radius of the robot itself are cleared of inflation before planning, so a robot that has drifted
-close to a wall can still plan its way out.
+radius plus a safety margin. With ``allow_unknown`` (as move_base's option of that name) unknown cells count as
+free, so a goal in a room SLAM has not seen yet gets an optimistic plan that is repaired as the map reveals it.
+The cells within the inflation distance of the robot itself are cleared of inflation before planning, so a
+robot that has drifted close to a wall can still plan its way out.
 
 A new plan is made when (in order):
 
@@ -42,10 +42,12 @@ import numpy as np
 import numpy.typing as npt
 
 from mrs_nav.errors import InvalidInputError, MrsNavError
-from mrs_nav.geometry import FloatArray, Pose2D
+from mrs_nav.geometry import FloatArray, Pose2D, wrap_angle
 from mrs_nav.occupancy_grid import BURGER_RADIUS, FREE, OCCUPIED, UNKNOWN, OccupancyGrid
 from mrs_nav.path_following import FollowerConfig, PathFollower, cross_track_distance
 from mrs_nav.planning import PlanResult, path_length
+from mrs_nav.rrt import RRTConfig, rrt
+from mrs_nav.rrt_star import RRTStarConfig, rrt_star
 
 
 class Planner(Protocol):
@@ -114,6 +116,9 @@ class NavigatorConfig:
     """Parameters of :class:`Navigator` (metres, seconds)."""
 
     robot_radius: float = BURGER_RADIUS
+    # Added to the robot radius when inflating the map: the planners keep exactly the inflated distance from
+    # obstacles, and the follower's cross-track error and the SLAM pose error eat into it.
+    safety_margin_m: float = 0.1
     goal_tolerance_m: float = 0.2
     allow_unknown: bool = True
     stray_distance_m: float = 0.3
@@ -121,6 +126,9 @@ class NavigatorConfig:
     improvement_ratio: float = 0.85
     improvement_min_m: float = 0.2
     max_failed_plans: int = 5
+    # Also plan from the robot turned round on the spot and keep the shorter plan: arcs run forward only, so a
+    # goal behind the robot otherwise costs a loop.
+    plan_turned_round: bool = True
     retry_delay_s: float = 1.0
     progress_m: float = 0.1
     progress_timeout_s: float = 30.0
@@ -132,12 +140,24 @@ class NavigatorConfig:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise InvalidInputError(f"navigator {name} must be a positive number, got {value}")
-        for name in ("robot_radius", "improvement_min_m", "retry_delay_s", "progress_timeout_s", "map_timeout_s"):
+        for name in (
+            "robot_radius",
+            "safety_margin_m",
+            "improvement_min_m",
+            "retry_delay_s",
+            "progress_timeout_s",
+            "map_timeout_s",
+        ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise InvalidInputError(f"navigator {name} must be a number >= 0, got {value}")
         if self.max_failed_plans < 1:
             raise InvalidInputError(f"navigator max_failed_plans must be >= 1, got {self.max_failed_plans}")
+
+    @property
+    def inflation_m(self) -> float:
+        """How far (m) obstacles are grown for planning: the robot radius plus the safety margin."""
+        return self.robot_radius + self.safety_margin_m
 
 
 def planning_grid(grid: OccupancyGrid, robot_radius: float, allow_unknown: bool) -> OccupancyGrid:
@@ -214,7 +234,7 @@ class Navigator:
             return None
         if self._plan_grid is None:
             cfg = self.config
-            self._plan_grid = planning_grid(self._grid, cfg.robot_radius, cfg.allow_unknown)
+            self._plan_grid = planning_grid(self._grid, cfg.inflation_m, cfg.allow_unknown)
         return self._plan_grid
 
     def set_goal(self, x: float, y: float, now: float) -> list[NavEvent]:
@@ -255,7 +275,7 @@ class Navigator:
         if self._grid.is_occupied(goal)[0]:
             return "it lies inside an obstacle"
         if grid.is_occupied(goal)[0]:
-            return f"it lies within the robot radius ({self.config.robot_radius:.3f} m) of an obstacle"
+            return f"it lies within {self.config.inflation_m:.3f} m (robot radius + margin) of an obstacle"
         if not grid.is_free(goal)[0]:
             return "it lies in unknown space and allow_unknown is off"
         return None
@@ -365,7 +385,7 @@ class Navigator:
         raw map counts (the robot may legitimately be within the inflation of a wall it is leaving)."""
         grid, raw = self._maps()
         rest = densify(self._remaining_path(), grid.resolution / 2.0)
-        near = np.hypot(rest[:, 0] - pose.x, rest[:, 1] - pose.y) <= self.config.robot_radius + grid.resolution
+        near = np.hypot(rest[:, 0] - pose.x, rest[:, 1] - pose.y) <= self.config.inflation_m + grid.resolution
         return bool(np.any(grid.is_occupied(rest[~near])) or np.any(raw.is_occupied(rest[near])))
 
     def _replan(self, pose: Pose2D, now: float, reason: str, events: list[NavEvent]) -> FloatArray | None:
@@ -425,14 +445,23 @@ class Navigator:
     def _plan(self, pose: Pose2D) -> tuple[PlanResult | None, str]:
         grid, raw = self._maps()
         assert self.goal is not None
-        grid = clear_footprint(grid, raw, [pose.x, pose.y], self.config.robot_radius)
-        try:
-            result = self.planner(grid, pose, self.goal, self.rng)
-        except MrsNavError as err:
-            return None, str(err)
-        if not result.success or result.path.shape[0] == 0:
-            return None, result.reason or "no path"
-        return result, ""
+        grid = clear_footprint(grid, raw, [pose.x, pose.y], self.config.inflation_m)
+        starts = [pose]
+        if self.config.plan_turned_round:
+            starts.append(Pose2D(pose.x, pose.y, wrap_angle(pose.yaw + math.pi)))
+        best: PlanResult | None = None
+        why = "no path"
+        for start in starts:
+            try:
+                result = self.planner(grid, start, self.goal, self.rng)
+            except MrsNavError as err:
+                why = str(err)
+                continue
+            if not result.success or result.path.shape[0] == 0:
+                why = result.reason or "no path"
+            elif best is None or result.length_m < best.length_m:
+                best = result
+        return best, "" if best is not None else why
 
     def _with_goal(self, path: FloatArray) -> FloatArray:
         """The planned path, ending exactly at the goal (planners stop within their own tolerance of it)."""
@@ -459,3 +488,30 @@ def densify(points: npt.ArrayLike, step: float) -> FloatArray:
     starts = np.repeat(np.arange(xy.shape[0] - 1), counts)
     out = xy[starts] + t[:, None] * (xy[starts + 1] - xy[starts])
     return np.vstack((out, xy[-1:]))
+
+
+PLANNERS = ("rrt_star", "rrt")
+
+
+def rrt_planner(kind: str = "rrt_star", time_budget_s: float | None = 0.3, iterations: int | None = None) -> Planner:
+    """A :class:`Planner` running the project's RRT* (``"rrt_star"``) or RRT (``"rrt"``) with circular-arc edges,
+    within ``time_budget_s`` wall-clock seconds and/or ``iterations`` samples."""
+    if kind == "rrt_star":
+        star = RRTStarConfig(iterations=iterations, time_budget=time_budget_s)
+
+        def plan_star(
+            grid: OccupancyGrid, start: Pose2D, goal: tuple[float, float], rng: np.random.Generator
+        ) -> PlanResult:
+            return rrt_star(start, np.asarray(goal, dtype=np.float64), grid, star, rng)
+
+        return plan_star
+    if kind == "rrt":
+        plain = RRTConfig(iterations=iterations if iterations is not None else 5000, time_budget=time_budget_s)
+
+        def plan_rrt(
+            grid: OccupancyGrid, start: Pose2D, goal: tuple[float, float], rng: np.random.Generator
+        ) -> PlanResult:
+            return rrt(start, np.asarray(goal, dtype=np.float64), grid, plain, rng)
+
+        return plan_rrt
+    raise InvalidInputError(f"unknown planner {kind!r}; expected one of {', '.join(PLANNERS)}")

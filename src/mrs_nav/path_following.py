@@ -170,6 +170,9 @@ class FollowerConfig:
     # How far along the path beyond the end of the segment reached the follower looks for the segment beside it:
     # far enough to catch up after a disturbance, short enough not to cut across to a later part of the path.
     lookahead_m: float = 0.6
+    # Feedback linearisation backs the robot up when the point's velocity points behind it; without reversing
+    # (a forward-looking laser, planners that plan forward arcs) the robot turns on the spot instead.
+    allow_reverse: bool = False
 
     def __post_init__(self) -> None:
         for name in ("speed", "epsilon", "gain", "goal_tolerance", "max_linear", "max_angular", "lookahead_m"):
@@ -233,6 +236,9 @@ class PathFollower:
             self.segment = where.segment
             cross = where.cross_track_m
         u, omega = feedback_linearized(pose, velocity, cfg.epsilon)
+        if not cfg.allow_reverse and u < 0.0:
+            # the point should move backwards: turn on the spot towards its velocity (left when dead behind)
+            u, omega = 0.0, math.copysign(cfg.max_angular, omega) if omega else cfg.max_angular
         u, omega = saturate(u, omega, cfg.max_linear, cfg.max_angular)
         return FollowCommand(u, omega, False, cross)
 

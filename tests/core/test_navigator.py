@@ -106,7 +106,7 @@ def test_goal_across_the_room_is_reached_within_tolerance_and_the_robot_stops() 
     [
         ((math.nan, 0.0), "not a finite number"),
         ((0.0, 0.0), "inside an obstacle"),
-        ((0.27, 0.0), "within the robot radius"),
+        ((0.27, 0.0), "robot radius + margin"),
         ((5.0, 0.0), "outside the map"),
     ],
 )
@@ -211,7 +211,8 @@ class ScriptedPlanner:
 
 def test_periodic_plans_replace_the_path_only_when_clearly_shorter() -> None:
     planner = ScriptedPlanner([1.3, 1.25, 1.0])
-    nav = Navigator(planner, NavigatorConfig(replan_period_s=2.0, improvement_ratio=0.85, stray_distance_m=1.0))
+    config = NavigatorConfig(replan_period_s=2.0, improvement_ratio=0.85, stray_distance_m=1.0, plan_turned_round=False)
+    nav = Navigator(planner, config)
     nav.set_map(arena(), 0.0)
     nav.set_goal(1.5, -1.5, 0.0)
     pose = Pose2D(-1.5, -1.5, 0.0)
@@ -303,3 +304,22 @@ def test_bad_configuration_is_refused() -> None:
         NavigatorConfig(goal_tolerance_m=0.0)
     with pytest.raises(InvalidInputError, match="max_failed_plans"):
         NavigatorConfig(max_failed_plans=0)
+
+
+def test_a_goal_behind_the_robot_is_planned_from_the_robot_turned_round() -> None:
+    def forward_only(grid: OccupancyGrid, start: Pose2D, goal: tuple[float, float], rng) -> PlanResult:
+        # a straight path, plus a loop of radius 0.3 m when the goal is behind the start heading
+        ahead = math.cos(start.yaw) * (goal[0] - start.x) + math.sin(start.yaw) * (goal[1] - start.y)
+        path = headings_along(np.array([[start.x, start.y], goal]))
+        path[0, 2] = start.yaw
+        extra = 0.0 if ahead > 0.0 else 2.0 * math.pi * 0.3
+        return PlanResult(True, path, path_length(path) + extra, 0.001, 0.001, 1, 2, "found")
+
+    nav = Navigator(forward_only)
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(-1.0, 0.0, 0.0)
+    cmd = nav.update(Pose2D(1.0, 0.0, 0.0), 0.0)
+    assert cmd.path is not None
+    assert abs(cmd.path[0, 2]) == pytest.approx(math.pi)
+    assert cmd.u == 0.0  # it turns on the spot rather than backing up
+    assert abs(cmd.omega) > 0.0
