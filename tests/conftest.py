@@ -8,10 +8,18 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from hypothesis import HealthCheck, settings
 
 from tests.rosharness import REPO, RosMaster
 
 WORLDS = REPO / "worlds"
+
+# Property tests are derandomised (the same examples every run, so CI never flakes) and carry no deadline or
+# speed health check: the 2-core machines run ROS processes beside them and timing is not what they test.
+settings.register_profile(
+    "mrs_nav", derandomize=True, deadline=None, suppress_health_check=[HealthCheck.too_slow], print_blob=True
+)
+settings.load_profile("mrs_nav")
 
 
 @pytest.fixture(scope="session")

@@ -1,19 +1,30 @@
-"""``mrs-nav figures``: the assignment's figures as PNGs."""
+"""``mrs-nav figures``: the assignment's figures as PNGs, seeded and deterministic."""
 
 from __future__ import annotations
 
 import argparse
+import importlib
+from pathlib import Path
 from typing import Any
 
-from mrs_nav.cli.common import fail
+# Figure-set modules under mrs_nav.figures, each exposing make_figures(out_dir, seed) -> list[Path].
+FIGURE_SETS = ("mrs_nav.figures.potential_field",)
 
 
 def register(subparsers: Any) -> None:
     parser: argparse.ArgumentParser = subparsers.add_parser(
-        "figures", help="the assignment's figures as PNGs (not available yet)"
+        "figures",
+        help="the assignment's figures as PNGs, seeded and deterministic",
+        description="Write the assignment's figures as PNG files into --out.",
     )
+    parser.add_argument("--out", type=Path, required=True, help="output folder (created if missing)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the randomised figures (default 0)")
     parser.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    return fail("'mrs-nav figures' is not available in this version yet")
+    for name in FIGURE_SETS:
+        written: list[Path] = importlib.import_module(name).make_figures(args.out, args.seed)
+        for path in written:
+            print(path)
+    return 0

@@ -1,19 +1,104 @@
-"""``mrs-nav plan``: one planning query on a map or world."""
+"""``mrs-nav plan``: one planning query on a world or a list of circles.
+
+Exit status: 0 when the goal is reached, 2 when it is not (the planner's reason on stderr), 1 on bad input.
+Planners are looked up in :data:`PLANNERS`: a name on the command line -> a function of the parsed
+arguments, the start pose and the goal returning a :class:`~mrs_nav.planning.PlanResult`.
+"""
 
 from __future__ import annotations
 
 import argparse
+import re
+from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
-from mrs_nav.cli.common import fail
+from mrs_nav.cli.common import fail, parse_floats, print_json
+from mrs_nav.errors import InvalidInputError
+from mrs_nav.geometry import Pose2D
+from mrs_nav.obstacles import Obstacles
+from mrs_nav.planning import PlanResult
+from mrs_nav.potential_field import Bounds, PotentialField, workspace_bounds
+from mrs_nav.randomized_potential_field import EscapeSettings, plan_potential_field
+from mrs_nav.world import load_world
+
+Planner = Callable[[argparse.Namespace, Pose2D, tuple[float, float]], PlanResult]
+
+
+def load_obstacles(args: argparse.Namespace) -> tuple[Obstacles, Bounds | None]:
+    """The obstacles of ``--world`` (with its extent as bounds) or ``--circles`` (JSON text or file; no bounds)."""
+    if args.world is not None:
+        world = load_world(args.world)
+        return Obstacles.from_world(world), world.bounds()
+    if args.circles is not None:
+        text: str = args.circles
+        if not text.lstrip().startswith("[") and Path(text).is_file():
+            return Obstacles.from_json_file(text), None
+        return Obstacles.from_json(text, "--circles"), None
+    raise InvalidInputError("the potential field needs obstacles: give --world or --circles")
+
+
+def check_free(obstacles: Obstacles, bounds: Bounds | None, what: str, x: float, y: float) -> None:
+    """Raise :class:`InvalidInputError` when ``(x, y)`` is outside ``bounds`` or inside an obstacle."""
+    if bounds is not None and not (bounds[0] <= x <= bounds[2] and bounds[1] <= y <= bounds[3]):
+        raise InvalidInputError(
+            f"{what} ({x}, {y}) is outside the world [{bounds[0]:g}, {bounds[2]:g}] x [{bounds[1]:g}, {bounds[3]:g}]"
+        )
+    if obstacles.contains((x, y))[0]:
+        raise InvalidInputError(f"{what} ({x}, {y}) is inside an obstacle")
+
+
+def plan_with_potential_field(args: argparse.Namespace, start: Pose2D, goal: tuple[float, float]) -> PlanResult:
+    obstacles, bounds = load_obstacles(args)
+    check_free(obstacles, bounds, "start", start.x, start.y)
+    check_free(obstacles, bounds, "goal", *goal)
+    field = PotentialField.build(goal, obstacles, bounds or workspace_bounds(obstacles, (start.x, start.y), goal))
+    settings = EscapeSettings(max_steps=args.max_steps)
+    return plan_potential_field(field, (start.x, start.y, start.yaw), args.seed, settings)
+
+
+PLANNERS: dict[str, Planner] = {
+    "potential_field": plan_with_potential_field,
+}
 
 
 def register(subparsers: Any) -> None:
     parser: argparse.ArgumentParser = subparsers.add_parser(
-        "plan", help="one planning query on a map or world (not available yet)"
+        "plan",
+        help="one planning query on a world or a list of circles",
+        description="Plan from --start to --goal. Exit 0 when the goal is reached, 2 when not, 1 on bad input.",
     )
+    # Let "--start -1.5,-1.5,0" through: argparse takes only plain numbers like "-1.5" for negative values, and
+    # would read a comma-separated list starting with "-" as an unknown option.
+    parser._negative_number_matcher = re.compile(r"^-\.?\d")
+    source = parser.add_mutually_exclusive_group(required=True)
+    source.add_argument("--world", type=Path, help="Gazebo SDF .world file (its boxes and cylinders)")
+    source.add_argument(
+        "--circles", metavar="JSON", help="circular obstacles: JSON text or file, [[x, y, r], ...] in metres"
+    )
+    parser.add_argument("--planner", choices=sorted(PLANNERS), default="potential_field")
+    parser.add_argument("--start", required=True, metavar="X,Y[,YAW]", help="start pose (m, m, rad)")
+    parser.add_argument("--goal", required=True, metavar="X,Y", help="goal position (m)")
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument(
+        "--max-steps", type=int, default=EscapeSettings().max_steps, help="potential field: integration steps"
+    )
+    parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
     parser.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    return fail("'mrs-nav plan' is not available in this version yet")
+    start_values = parse_floats(args.start, (2, 3), "--start")
+    start = Pose2D(*start_values)
+    gx, gy = parse_floats(args.goal, 2, "--goal")
+    result = PLANNERS[args.planner](args, start, (gx, gy))
+    if args.json:
+        print_json(result.to_json())
+    else:
+        print(
+            f"{args.planner}: {result.reason}; {result.length_m:.3f} m through {result.path.shape[0]} waypoints "
+            f"in {result.time_s * 1000:.1f} ms ({result.iterations} iterations)"
+        )
+    if not result.success:
+        return fail(f"goal not reached: {result.reason}", 2)
+    return 0

@@ -1,0 +1,58 @@
+"""Small drawing helpers shared by the figure sets: headless axes, obstacles, vector fields, saving."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")  # headless: figures are files, never windows
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.patches import Circle, Polygon
+
+from mrs_nav.geometry import FloatArray
+from mrs_nav.obstacles import Obstacles
+
+OBSTACLE_COLOUR = "#7f7f7f"
+
+
+def new_axes(title: str, limits: tuple[float, float, float, float]) -> tuple[Any, Any]:
+    """A square figure with equal axes over ``limits`` = (xmin, ymin, xmax, ymax) metres."""
+    fig, ax = plt.subplots(figsize=(6.0, 6.0), dpi=100)
+    ax.set_title(title, fontsize=10)
+    ax.set_xlim(limits[0], limits[2])
+    ax.set_ylim(limits[1], limits[3])
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    return fig, ax
+
+
+def draw_obstacles(ax: Any, obstacles: Obstacles) -> None:
+    for x, y, r in obstacles.circles:
+        ax.add_patch(Circle((x, y), r, color=OBSTACLE_COLOUR, alpha=0.8, zorder=2))
+    for corners in obstacles.box_corners():
+        ax.add_patch(Polygon(corners, closed=True, color=OBSTACLE_COLOUR, alpha=0.8, zorder=2))
+
+
+def draw_field(ax: Any, points: FloatArray, velocities: FloatArray) -> None:
+    """Arrows of the velocity field at ``points`` ``(P, 2)`` (m/s, drawn to a common scale)."""
+    ax.quiver(points[:, 0], points[:, 1], velocities[:, 0], velocities[:, 1], color="#1f77b4", alpha=0.6, zorder=1)
+
+
+def grid(limits: tuple[float, float, float, float], count: int = 25) -> FloatArray:
+    xs = np.linspace(limits[0], limits[2], count)
+    ys = np.linspace(limits[1], limits[3], count)
+    gx, gy = np.meshgrid(xs, ys)
+    return np.column_stack([gx.ravel(), gy.ravel()])
+
+
+def save(fig: Any, path: Path) -> Path:
+    """Write ``fig`` as a PNG without the time-stamped metadata, so equal seeds give equal files."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, format="png", metadata={"Software": None})
+    plt.close(fig)
+    return path

@@ -1,0 +1,135 @@
+"""Figures 1-7 of the assignment: the potential-field method, its traps and their fixes.
+
+1. attractive field only: straight to the goal, through the cylinder;
+2. repulsive field only, with the field: pushed away from the obstacles;
+3. combined field: around the cylinder to the goal;
+4. cylinder at the origin: noise-free descent stuck at the saddle point, and the noisy descent (1e);
+5. two-cylinder local minimum: the trajectory with its random-walk steps (1f);
+6. the simplification algorithm: raw trajectory, forward shortcuts only, and with back-tracking;
+7. the simplified trajectory against the true shortest path.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mrs_nav.figures.drawing import draw_field, draw_obstacles, grid, new_axes, save
+from mrs_nav.geometry import FloatArray
+from mrs_nav.path_simplification import simplify_path
+from mrs_nav.planning import path_length
+from mrs_nav.potential_field import FieldMode, PotentialField, trace
+from mrs_nav.potential_field_scenarios import Scenario, course_arena, symmetric_trap, two_cylinder_trap
+from mrs_nav.randomized_potential_field import EscapeSettings, Rollout, roll_out
+from mrs_nav.shortest_path import shortest_path
+
+ARENA_LIMITS = (-2.2, -2.2, 2.2, 2.2)
+TRAP_LIMITS = (-2.0, -1.5, 2.0, 1.5)
+
+
+def _scene(title: str, scenario: Scenario, limits: tuple[float, float, float, float]) -> tuple[Any, Any]:
+    fig, ax = new_axes(title, limits)
+    draw_obstacles(ax, scenario.obstacles)
+    ax.plot(*scenario.start, "o", color="tab:green", label="start", zorder=4)
+    ax.plot(*scenario.goal, "*", color="tab:red", markersize=12, label="goal", zorder=4)
+    return fig, ax
+
+
+def _with_field(ax: Any, field: PotentialField, mode: FieldMode, limits: tuple[float, float, float, float]) -> None:
+    points = grid(limits)
+    points = points[~field.obstacles.contains(points)]
+    draw_field(ax, points, field.velocity(points, mode))
+
+
+def _field_figure(out: Path, number: int, title: str, mode: FieldMode) -> Path:
+    scenario = course_arena()
+    field = scenario.field()
+    fig, ax = _scene(f"Figure {number}: {title}", scenario, ARENA_LIMITS)
+    _with_field(ax, field, mode, ARENA_LIMITS)
+    path = trace(field, scenario.start, mode=mode)
+    ax.plot(path[:, 0], path[:, 1], color="tab:orange", linewidth=2, label="trajectory", zorder=3)
+    ax.legend(loc="lower right", fontsize=8)
+    return save(fig, out / f"figure{number}_{mode.value}_field.png")
+
+
+def _rollout(scenario: Scenario, seed: int, settings: EscapeSettings) -> Rollout:
+    (rollout,) = roll_out(scenario.field(), scenario.start, [seed], settings)
+    return rollout
+
+
+def _figure4(out: Path, seed: int) -> Path:
+    scenario = symmetric_trap()
+    field = scenario.field()
+    fig, ax = _scene("Figure 4: obstacle at the origin; noise on the attractive field", scenario, ARENA_LIMITS)
+    _with_field(ax, field, FieldMode.COMBINED, ARENA_LIMITS)
+    stuck = trace(field, scenario.start)
+    ax.plot(stuck[:, 0], stuck[:, 1], "--", color="black", linewidth=1.5, label="no noise", zorder=5)
+    ax.plot(*stuck[-1], "X", color="black", markersize=10, label="stuck at the saddle point", zorder=5)
+    noisy = _rollout(scenario, seed, EscapeSettings(random_walk=False))
+    ax.plot(*noisy.trajectory.T, color="tab:orange", linewidth=2, label=f"with noise (seed {noisy.seed})", zorder=3)
+    ax.legend(loc="lower right", fontsize=8)
+    return save(fig, out / "figure4_saddle_noise.png")
+
+
+def _walk_rollout(seed: int) -> tuple[Scenario, Rollout]:
+    scenario = two_cylinder_trap()
+    return scenario, _rollout(scenario, seed, EscapeSettings())
+
+
+def _figure5(out: Path, scenario: Scenario, rollout: Rollout) -> Path:
+    fig, ax = _scene("Figure 5: random walk out of the local minimum", scenario, TRAP_LIMITS)
+    _with_field(ax, scenario.field(), FieldMode.COMBINED, TRAP_LIMITS)
+    path = rollout.trajectory
+    ax.plot(path[:, 0], path[:, 1], color="tab:orange", linewidth=1.5, label="best-first steps", zorder=3)
+    walk = np.flatnonzero(rollout.walking)
+    segments = np.stack([path[walk], path[walk + 1]], axis=1)
+    for k, seg in enumerate(segments):
+        ax.plot(
+            seg[:, 0], seg[:, 1], color="tab:purple", linewidth=1, label=None if k else "random-walk steps", zorder=4
+        )
+    ax.legend(loc="lower right", fontsize=8, title=f"seed {rollout.seed}, {rollout.walk_steps} walk steps")
+    return save(fig, out / "figure5_random_walk.png")
+
+
+def _plot_path(ax: Any, path: FloatArray, style: str, colour: str, label: str) -> None:
+    ax.plot(path[:, 0], path[:, 1], style, color=colour, linewidth=2, label=f"{label}: {path_length(path):.3f} m")
+
+
+def _figure6(out: Path, scenario: Scenario, rollout: Rollout) -> Path:
+    fig, ax = _scene("Figure 6: simplification by shortcuts and back-tracking", scenario, TRAP_LIMITS)
+    free = scenario.obstacles.segments_free
+    raw = rollout.trajectory
+    ax.plot(raw[:, 0], raw[:, 1], color="tab:orange", linewidth=0.8, alpha=0.6, label="raw trajectory")
+    forward = simplify_path(raw, free, backtrack=False)
+    _plot_path(ax, forward, "o--", "tab:blue", "forward shortcuts only")
+    final = simplify_path(raw, free)
+    _plot_path(ax, final, "s-", "tab:red", "with back-tracking")
+    ax.legend(loc="lower right", fontsize=8)
+    return save(fig, out / "figure6_simplification_steps.png")
+
+
+def _figure7(out: Path, scenario: Scenario, rollout: Rollout) -> Path:
+    fig, ax = _scene("Figure 7: random walk escape after simplification", scenario, TRAP_LIMITS)
+    raw = rollout.trajectory
+    ax.plot(raw[:, 0], raw[:, 1], color="tab:orange", linewidth=0.8, alpha=0.4, label="raw trajectory")
+    _plot_path(ax, simplify_path(raw, scenario.obstacles.segments_free), "-", "tab:red", "simplified")
+    best = shortest_path(scenario.start, scenario.goal, scenario.obstacles)
+    _plot_path(ax, best.points, ":", "black", "true shortest")
+    ax.legend(loc="lower right", fontsize=8)
+    return save(fig, out / "figure7_simplified.png")
+
+
+def make_figures(out_dir: Path, seed: int) -> list[Path]:
+    """Write Figures 1-7 as PNGs into ``out_dir``; the random ones use ``seed``. Returns the files."""
+    written = [
+        _field_figure(out_dir, 1, "attractive field only", FieldMode.ATTRACTIVE),
+        _field_figure(out_dir, 2, "repulsive field only", FieldMode.REPULSIVE),
+        _field_figure(out_dir, 3, "combined field", FieldMode.COMBINED),
+        _figure4(out_dir, seed),
+    ]
+    scenario, rollout = _walk_rollout(seed)
+    written += [_figure5(out_dir, scenario, rollout), _figure6(out_dir, scenario, rollout)]
+    written.append(_figure7(out_dir, scenario, rollout))
+    return written

@@ -1,0 +1,204 @@
+"""SimulatorNode: the ODE simulator (:class:`mrs_nav.sim.Simulator`) as a ROS 1 node in place of Gazebo.
+
+Subscribes ``cmd_vel`` (geometry_msgs/Twist). Publishes ``clock`` (it *is* the clock: run with
+``/use_sim_time`` true), ``odom`` (nav_msgs/Odometry) and tf ``odom -> base_footprint``, ``scan``
+(sensor_msgs/LaserScan, frame ``base_scan``), ``ground_truth/odom`` (the true pose, frame ``world``, which
+coincides with ``odom`` at time zero) and ``joint_states`` (the wheels, for robot_state_publisher, which
+publishes the static base_footprint -> base_link -> base_scan from ``urdf/burger.urdf``).
+
+The node steps the simulator in its own loop at the fixed physics rate, paced against the wall clock by
+``~real_time_factor`` (1 = real time, 2 = twice as fast, 0 = as fast as the machine allows). ``/clock`` goes
+out every ``physics_rate / clock_rate`` steps, so sim-time timers in other nodes keep their resolution at any
+speed. A bad ``cmd_vel`` (non-finite numbers) is logged and ignored; the watchdog then stops the robot.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import rospy
+import tf2_ros
+from geometry_msgs.msg import Twist
+from nav_msgs.msg import Odometry as OdometryMsg
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState, LaserScan
+
+from mrs_nav.errors import InvalidInputError
+from mrs_nav.geometry import Pose2D
+from mrs_nav.ros.conversions import (
+    clock_msg,
+    joint_state_msg,
+    laser_scan_msg,
+    odometry_msg,
+    transform_stamped,
+    twist_from_msg,
+)
+from mrs_nav.sim import LaserParams, Simulator, SimulatorConfig, Twist2D
+from mrs_nav.sim.laser import Scan
+from mrs_nav.world import load_world
+
+WHEEL_JOINTS = ("wheel_left_joint", "wheel_right_joint")
+# When pacing falls this far behind (s of wall time), the lag is forgiven rather than caught up in a burst.
+_MAX_LAG = 0.25
+
+
+def _rate_divisor(physics_rate: float, rate: float, name: str) -> int:
+    """Steps between publications of a stream at ``rate`` Hz; the rate must divide the physics rate."""
+    if not (math.isfinite(rate) and 0.0 < rate <= physics_rate):
+        raise InvalidInputError(f"~{name}: must be in (0, {physics_rate}] Hz, got {rate}")
+    divisor = round(physics_rate / rate)
+    if abs(physics_rate / divisor - rate) > 1e-6:
+        raise InvalidInputError(f"~{name}: {rate} Hz does not divide the physics rate {physics_rate} Hz")
+    return divisor
+
+
+@dataclass(frozen=True)
+class SimulatorNodeConfig:
+    """Everything the node reads from its private parameters, validated once at start."""
+
+    world: Path
+    start: Pose2D
+    sim: SimulatorConfig = field(default_factory=SimulatorConfig)
+    real_time_factor: float = 1.0
+    odom_rate: float = 50.0
+    clock_rate: float = 100.0
+    odom_frame: str = "odom"
+    base_frame: str = "base_footprint"
+    scan_frame: str = "base_scan"
+    ground_truth_frame: str = "world"
+    publish_tf: bool = True
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.real_time_factor) and self.real_time_factor >= 0.0):
+            raise InvalidInputError(
+                f"~real_time_factor: must be >= 0 (0 = as fast as possible), got {self.real_time_factor}"
+            )
+        _rate_divisor(self.sim.physics_rate, self.odom_rate, "odom_rate")
+        _rate_divisor(self.sim.physics_rate, self.clock_rate, "clock_rate")
+
+    @classmethod
+    def from_params(cls) -> SimulatorNodeConfig:
+        """Read the ``~`` parameters (defaults as in config/simulator.yaml)."""
+
+        def get(name: str, default: Any) -> Any:
+            return rospy.get_param(f"~{name}", default)
+
+        world = str(get("world", ""))
+        if not world:
+            raise InvalidInputError("~world: a world file is required")
+        laser = LaserParams(
+            range_min=float(get("range_min", 0.12)),
+            range_max=float(get("range_max", 3.5)),
+            rate=float(get("scan_rate", 5.0)),
+            noise_sigma=float(get("scan_noise", 0.01)),
+        )
+        sim = SimulatorConfig(
+            laser=laser,
+            physics_rate=float(get("physics_rate", 100.0)),
+            odom_noise=float(get("odom_noise", 0.0)),
+            seed=int(get("seed", 0)),
+        )
+        return cls(
+            world=Path(world),
+            start=Pose2D(float(get("x", 0.0)), float(get("y", 0.0)), float(get("yaw", 0.0))),
+            sim=sim,
+            real_time_factor=float(get("real_time_factor", 1.0)),
+            odom_rate=float(get("odom_rate", 50.0)),
+            clock_rate=float(get("clock_rate", 100.0)),
+            odom_frame=str(get("odom_frame", "odom")),
+            base_frame=str(get("base_frame", "base_footprint")),
+            scan_frame=str(get("scan_frame", "base_scan")),
+            ground_truth_frame=str(get("ground_truth_frame", "world")),
+            publish_tf=bool(get("publish_tf", True)),
+        )
+
+
+class SimulatorNode:
+    """Wires a :class:`Simulator` to ROS topics; :meth:`spin` runs the stepping loop until shutdown."""
+
+    def __init__(self, config: SimulatorNodeConfig) -> None:
+        self.config = config
+        self.sim = Simulator(load_world(config.world), config.sim, config.start)
+        self._lock = threading.Lock()
+        self._odom_every = _rate_divisor(config.sim.physics_rate, config.odom_rate, "odom_rate")
+        self._clock_every = _rate_divisor(config.sim.physics_rate, config.clock_rate, "clock_rate")
+        self._clock_pub = rospy.Publisher("clock", Clock, queue_size=10)
+        self._odom_pub = rospy.Publisher("odom", OdometryMsg, queue_size=10)
+        self._truth_pub = rospy.Publisher("ground_truth/odom", OdometryMsg, queue_size=10)
+        self._scan_pub = rospy.Publisher("scan", LaserScan, queue_size=5)
+        self._joints_pub = rospy.Publisher("joint_states", JointState, queue_size=10)
+        self._tf = tf2_ros.TransformBroadcaster() if config.publish_tf else None
+        self._cmd_sub = rospy.Subscriber("cmd_vel", Twist, self._on_cmd_vel, queue_size=10)
+
+    def _on_cmd_vel(self, msg: Twist) -> None:
+        try:
+            twist = twist_from_msg(msg)
+        except InvalidInputError as err:
+            rospy.logwarn_throttle(5.0, f"simulator: ignoring cmd_vel: {err}")
+            return
+        with self._lock:
+            self.sim.set_command(twist.v, twist.omega)
+
+    def _publish_state(self) -> None:
+        cfg = self.config
+        with self._lock:
+            now = self.sim.time
+            odom = self.sim.odometry()
+            truth, truth_twist = self.sim.ground_truth(), self.sim.ground_truth_twist()
+            wheels = self.sim.wheels()
+        self._odom_pub.publish(
+            odometry_msg(
+                odom.pose, Twist2D(odom.v, odom.omega), now, frame_id=cfg.odom_frame, child_frame_id=cfg.base_frame
+            )
+        )
+        if self._tf is not None:
+            self._tf.sendTransform(transform_stamped(odom.pose, now, cfg.odom_frame, cfg.base_frame))
+        self._truth_pub.publish(
+            odometry_msg(truth, truth_twist, now, frame_id=cfg.ground_truth_frame, child_frame_id=cfg.base_frame)
+        )
+        self._joints_pub.publish(
+            joint_state_msg(
+                WHEEL_JOINTS,
+                (wheels.left_angle, wheels.right_angle),
+                (wheels.left_rate, wheels.right_rate),
+                now,
+            )
+        )
+
+    def _publish_scan(self, scan: Scan) -> None:
+        self._scan_pub.publish(laser_scan_msg(scan, self.config.scan_frame))
+
+    def step(self) -> None:
+        """One physics step and whatever publications fall due at its end."""
+        with self._lock:
+            scan = self.sim.step()
+            steps, now = self.sim.steps, self.sim.time
+        if steps % self._clock_every == 0:
+            self._clock_pub.publish(clock_msg(now))
+        if steps % self._odom_every == 0:
+            self._publish_state()
+        if scan is not None:
+            self._publish_scan(scan)
+
+    def spin(self) -> None:
+        """Step until shutdown, paced by ``real_time_factor`` against the wall clock."""
+        rtf = self.config.real_time_factor
+        self._clock_pub.publish(clock_msg(self.sim.time))
+        wall_start, sim_start = time.monotonic(), self.sim.time
+        while not rospy.is_shutdown():
+            self.step()
+            if rtf > 0.0:
+                ahead = (self.sim.time - sim_start) / rtf - (time.monotonic() - wall_start)
+                if ahead > 0.0:
+                    time.sleep(ahead)
+                elif ahead < -_MAX_LAG:
+                    # The machine cannot keep this rate: carry on from here rather than bursting to catch up.
+                    wall_start, sim_start = time.monotonic(), self.sim.time
+            elif self.sim.steps % self._clock_every == 0:
+                # Flat out: give the subscriber threads (cmd_vel) a chance at the GIL every clock tick.
+                time.sleep(0)

@@ -1,0 +1,19 @@
+"""The ODE simulator of a TurtleBot3-Burger-like robot (no ROS): physics, laser, odometry, commands."""
+
+from mrs_nav.sim.commands import CommandLimiter, Twist2D
+from mrs_nav.sim.laser import LaserParams, Scan
+from mrs_nav.sim.odometry import Odometry
+from mrs_nav.sim.robot import BurgerParams
+from mrs_nav.sim.simulator import ContactStats, Simulator, SimulatorConfig
+
+__all__ = [
+    "BurgerParams",
+    "CommandLimiter",
+    "ContactStats",
+    "LaserParams",
+    "Odometry",
+    "Scan",
+    "Simulator",
+    "SimulatorConfig",
+    "Twist2D",
+]

@@ -1,0 +1,204 @@
+"""The simulator: a Burger-like robot in a world, stepped at a fixed rate, with laser, odometry and contacts.
+
+One :meth:`Simulator.step` advances sim time by ``1 / physics_rate`` seconds: the command limiter turns the
+last (v, omega) into wheel-rate targets, ODE steps the bodies, the wheel odometry integrates what the hinges
+turned, contacts with obstacles are counted, and every ``physics_rate / laser.rate``-th step a scan is taken
+(stamped at exact multiples of the laser period). Sim time is ``steps / physics_rate``, never an accumulated
+float. Given the same world, configuration, start pose, seed and command sequence, two simulators produce
+identical states, odometry and scans.
+
+No ROS here: the ROS node (``mrs_nav.ros.simulator_node``), the benchmarks and offline scenarios all drive
+this class.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from mrs_nav.errors import InvalidInputError
+from mrs_nav.geometry import Pose2D, wrap_angle
+from mrs_nav.sim.commands import CommandLimiter, Twist2D
+from mrs_nav.sim.laser import Laser, LaserParams, Scan
+from mrs_nav.sim.odometry import Odometry, WheelOdometry
+from mrs_nav.sim.physics import Physics, WheelState
+from mrs_nav.sim.robot import BurgerParams
+from mrs_nav.world import World
+
+
+@dataclass(frozen=True)
+class SimulatorConfig:
+    """Robot, laser, fixed physics rate (Hz), extra odometry noise (fraction of wheel travel) and seed."""
+
+    robot: BurgerParams = field(default_factory=BurgerParams)
+    laser: LaserParams = field(default_factory=LaserParams)
+    physics_rate: float = 100.0
+    odom_noise: float = 0.0
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.physics_rate) and self.physics_rate > 0.0):
+            raise InvalidInputError(f"physics rate must be positive, got {self.physics_rate}")
+        ratio = self.physics_rate / self.laser.rate
+        if ratio < 1.0 - 1e-9 or abs(ratio - round(ratio)) > 1e-6:
+            raise InvalidInputError(
+                f"physics rate {self.physics_rate} Hz must be a whole multiple of the laser rate {self.laser.rate} Hz"
+            )
+
+    @property
+    def dt(self) -> float:
+        """The fixed physics step (s)."""
+        return 1.0 / self.physics_rate
+
+    @property
+    def steps_per_scan(self) -> int:
+        return round(self.physics_rate / self.laser.rate)
+
+
+@dataclass(frozen=True)
+class ContactStats:
+    """Contacts between the robot and obstacles since the start.
+
+    ``events`` counts contacts begun: a step touching after at least ``CONTACT_GAP`` s without touching (a
+    robot pushing against a wall bounces in and out of contact from step to step; that is one collision, not
+    dozens). ``steps`` counts the steps spent touching, ``obstacles`` names every obstacle ever touched and
+    ``in_contact`` is the state after the last step.
+    """
+
+    events: int = 0
+    steps: int = 0
+    obstacles: frozenset[str] = frozenset()
+    in_contact: bool = False
+
+
+CONTACT_GAP = 0.25  # s without touching before a new touch counts as a new contact event
+
+
+class Simulator:
+    """Steps one robot in one world; the Python API behind the ROS node and the benchmarks."""
+
+    def __init__(self, world: World, config: SimulatorConfig | None = None, start: Pose2D | None = None) -> None:
+        self.config = config or SimulatorConfig()
+        self.world = world
+        self.start = start or Pose2D(0.0, 0.0, 0.0)
+        laser_seed, odom_seed = np.random.SeedSequence(self.config.seed).spawn(2)
+        self._physics = Physics(world, self.config.robot, self.start)
+        self._laser = Laser(self._physics.obstacle_space, self.config.laser, np.random.default_rng(laser_seed))
+        self._odometry = WheelOdometry(
+            self.config.robot, self.config.odom_noise, np.random.default_rng(odom_seed), self.start
+        )
+        self._limiter = CommandLimiter(self.config.robot)
+        self._steps = 0
+        self._wheels = self._physics.wheels()
+        self._contacts = ContactStats()
+        self._last_touch_step = -(10**9)
+        self._last_scan: Scan | None = None
+
+    # -- driving ------------------------------------------------------------------------------------------------
+
+    @property
+    def time(self) -> float:
+        """Sim time (s) since the start."""
+        return self._steps / self.config.physics_rate
+
+    @property
+    def steps(self) -> int:
+        return self._steps
+
+    def set_command(self, v: float, omega: float) -> Twist2D:
+        """Command forward speed ``v`` (m/s) and turn rate ``omega`` (rad/s); returns them clamped to the limits.
+
+        The command holds until the next one, or until ``command_timeout`` s of sim time pass without one.
+        """
+        return self._limiter.receive(v, omega, self.time)
+
+    def step(self) -> Scan | None:
+        """Advance one physics step; returns the scan taken at the end of it, if one was due."""
+        dt = self.config.dt
+        command = self._limiter.update(self.time, dt)
+        left, right = self.config.robot.wheel_rates(command.v, command.omega)
+        touched = self._physics.step(left, right, dt)
+        self._steps += 1
+
+        wheels = self._physics.wheels()
+        self._odometry.update(
+            wrap_angle(wheels.left_angle - self._wheels.left_angle),
+            wrap_angle(wheels.right_angle - self._wheels.right_angle),
+            dt,
+        )
+        self._wheels = wheels
+
+        c = self._contacts
+        new_event = bool(touched) and (self._steps - self._last_touch_step) * dt > CONTACT_GAP
+        if touched:
+            self._last_touch_step = self._steps
+        self._contacts = ContactStats(
+            events=c.events + int(new_event),
+            steps=c.steps + int(bool(touched)),
+            obstacles=c.obstacles | touched if touched else c.obstacles,
+            in_contact=bool(touched),
+        )
+
+        if self._steps % self.config.steps_per_scan == 0:
+            self._last_scan = self._laser.scan(self._physics.pose(), self.time)
+            return self._last_scan
+        return None
+
+    def run(self, duration: float) -> list[Scan]:
+        """Step for ``duration`` s of sim time (rounded to whole steps); returns the scans taken."""
+        if not (math.isfinite(duration) and duration >= 0.0):
+            raise InvalidInputError(f"duration must be >= 0, got {duration}")
+        scans = []
+        for _ in range(round(duration * self.config.physics_rate)):
+            scan = self.step()
+            if scan is not None:
+                scans.append(scan)
+        return scans
+
+    # -- reading ------------------------------------------------------------------------------------------------
+
+    @property
+    def command(self) -> Twist2D:
+        """The (v, omega) applied at the last step, after limits, ramps and the watchdog."""
+        return self._limiter.current
+
+    @property
+    def watchdog_stopped(self) -> bool:
+        """Whether no command arrived within the timeout, so the robot is being stopped."""
+        return self._limiter.timed_out(self.time)
+
+    def ground_truth(self) -> Pose2D:
+        """True pose of ``base_footprint`` in the world frame."""
+        return self._physics.pose()
+
+    def ground_truth_twist(self) -> Twist2D:
+        """True body velocity (m/s, rad/s) in the robot frame."""
+        v, omega = self._physics.twist()
+        return Twist2D(v, omega)
+
+    def odometry(self) -> Odometry:
+        """Wheel odometry in the ``odom`` frame (equal to the world frame at time zero)."""
+        return self._odometry.state(self.time)
+
+    def wheels(self) -> WheelState:
+        """Wheel hinge angles (rad, wrapped to [-pi, pi]) and rates (rad/s), e.g. for joint_states."""
+        return self._wheels
+
+    @property
+    def last_scan(self) -> Scan | None:
+        return self._last_scan
+
+    def scan_now(self) -> Scan:
+        """A scan from the current pose, outside the laser's schedule (draws from the laser's noise stream)."""
+        return self._laser.scan(self._physics.pose(), self.time)
+
+    @property
+    def contacts(self) -> ContactStats:
+        return self._contacts
+
+    @property
+    def chassis_height(self) -> float:
+        """Height (m) of the chassis centre above the ground; a sanity check that the robot stays upright."""
+        return self._physics.height()
