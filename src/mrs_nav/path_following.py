@@ -28,6 +28,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mrs_nav.errors import InvalidInputError
+from mrs_nav.feedback_linearization import feedback_linearized, point_ahead
 from mrs_nav.geometry import FloatArray, Pose2D
 
 SPEED = 0.2  # m/s, nominal speed of the holonomic point along the path (the course's SPEED)
@@ -36,16 +37,6 @@ GAIN = 2.0  # 1/s, cross-track gain k
 GOAL_TOLERANCE = 0.05  # m, the holonomic point stops this close to the last path point
 MAX_LINEAR = 0.22  # m/s, TurtleBot3 Burger
 MAX_ANGULAR = 2.84  # rad/s, TurtleBot3 Burger
-
-
-def feedback_linearized(pose: Pose2D, velocity: npt.ArrayLike, epsilon: float) -> tuple[float, float]:
-    """Commands ``(u, omega)`` that move the point ``epsilon`` ahead of ``pose`` with ``velocity`` (m/s).
-
-    ``u = v_x cos(theta) + v_y sin(theta)``, ``omega = (-v_x sin(theta) + v_y cos(theta)) / epsilon``.
-    """
-    vx, vy = np.asarray(velocity, dtype=np.float64)[:2]
-    c, s = math.cos(pose.yaw), math.sin(pose.yaw)
-    return float(vx * c + vy * s), float((-vx * s + vy * c) / epsilon)
 
 
 @dataclass(frozen=True)
@@ -211,8 +202,7 @@ class PathFollower:
 
     def holonomic_point(self, pose: Pose2D) -> FloatArray:
         """The point ``epsilon`` ahead of ``pose`` that the follower steers."""
-        eps = self.config.epsilon
-        return np.array([pose.x + eps * math.cos(pose.yaw), pose.y + eps * math.sin(pose.yaw)])
+        return point_ahead(pose, self.config.epsilon)
 
     def command(self, pose: Pose2D) -> FollowCommand:
         """The commands for the robot at ``pose`` (in the path's frame)."""

@@ -15,7 +15,6 @@ from mrs_nav.path_following import (
     FollowerConfig,
     PathFollower,
     cross_track_distance,
-    feedback_linearized,
     get_velocity,
     locate_on_path,
     saturate,
@@ -95,14 +94,6 @@ def test_bad_paths_are_refused() -> None:
         get_velocity([0.0, 0.0], [[0.0, 0.0], [math.nan, 1.0]])
     with pytest.raises(InvalidInputError, match="epsilon"):
         FollowerConfig(epsilon=0.0)
-
-
-def test_feedback_linearisation_moves_the_holonomic_point_as_asked() -> None:
-    pose = Pose2D(1.0, 2.0, 0.7)
-    u, omega = feedback_linearized(pose, [0.1, -0.3], 0.1)
-    # forward kinematics of the point epsilon ahead: u (cos, sin) + epsilon omega (-sin, cos)
-    c, s = math.cos(0.7), math.sin(0.7)
-    np.testing.assert_allclose([u * c - 0.1 * omega * s, u * s + 0.1 * omega * c], [0.1, -0.3], atol=1e-12)
 
 
 @given(st.floats(-5.0, 5.0), st.floats(-50.0, 50.0))
