@@ -174,8 +174,7 @@ class Obstacles:
         rel = p[:, None, :] - c[None, :, :2]
         norm = np.hypot(rel[..., 0], rel[..., 1])
         dist_c = norm - c[None, :, 2]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            normal_c = np.where(norm[..., None] > 0.0, rel / norm[..., None], 0.0)
+        normal_c = np.divide(rel, norm[..., None], out=np.zeros_like(rel), where=norm[..., None] > 0.0)
         b = self.boxes
         cos, sin = np.cos(b[:, 2]), np.sin(b[:, 2])
         dx, dy = p[:, None, 0] - b[None, :, 0], p[:, None, 1] - b[None, :, 1]
@@ -186,8 +185,7 @@ class Obstacles:
         inside = np.minimum(excess.max(axis=-1), 0.0)
         dist_b = np.where(outside > 0.0, outside, inside)
         local = q - np.clip(q, -half, half)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            local = np.where(outside[..., None] > 0.0, local / outside[..., None], 0.0)
+        local = np.divide(local, outside[..., None], out=np.zeros_like(local), where=outside[..., None] > 0.0)
         normal_b = np.stack([cos * local[..., 0] - sin * local[..., 1], sin * local[..., 0] + cos * local[..., 1]], -1)
         return np.concatenate([dist_c, dist_b], axis=1), np.concatenate([normal_c, normal_b], axis=1)
 
@@ -216,9 +214,8 @@ class Obstacles:
         c = self.circles
         to_centre = c[None, :, :2] - a[:, None, :]
         length2 = np.einsum("ij,ij->i", step, step)[:, None]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            t = np.where(length2 > 0.0, np.einsum("ikj,ij->ik", to_centre, step) / length2, 0.0)
-        t = np.clip(t, 0.0, 1.0)
+        along = np.einsum("ikj,ij->ik", to_centre, step)
+        t = np.clip(np.divide(along, length2, out=np.zeros_like(along), where=length2 > 0.0), 0.0, 1.0)
         gap = to_centre - t[..., None] * step[:, None, :]
         hit = np.hypot(gap[..., 0], gap[..., 1]) <= c[None, :, 2] + clearance
         free: BoolArray = ~hit.any(axis=1)

@@ -54,8 +54,7 @@ def cap(velocities: npt.ArrayLike, max_speed: float) -> FloatArray:
     """Scale each row of ``velocities`` ``(P, 2)`` down to at most ``max_speed`` in norm, keeping its direction."""
     v = np.asarray(velocities, dtype=np.float64).reshape(-1, 2)
     speed = np.hypot(v[:, 0], v[:, 1])
-    with np.errstate(invalid="ignore", divide="ignore"):
-        scale = np.where(speed > max_speed, max_speed / speed, 1.0)
+    scale = np.divide(max_speed, speed, out=np.ones_like(speed), where=speed > max_speed)
     return np.asarray(v * scale[:, None], dtype=np.float64)
 
 

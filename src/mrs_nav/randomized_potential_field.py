@@ -36,7 +36,7 @@ from mrs_nav.geometry import FloatArray
 from mrs_nav.obstacles import BoolArray
 from mrs_nav.path_simplification import simplify_path
 from mrs_nav.planning import PlanResult, headings_along, path_length
-from mrs_nav.potential_field import PotentialField
+from mrs_nav.potential_field import PotentialField, cap
 
 REACHED = "goal reached"
 
@@ -132,7 +132,8 @@ def roll_out(
             break
         idx = np.flatnonzero(active)
         here = x[idx]
-        clean = field.velocity(here)
+        uncapped = field.attractive(here) + field.repulsive(here)
+        clean = cap(uncapped, field.max_speed)
         stalled = (np.hypot(clean[:, 0], clean[:, 1]) < s.stall_speed) & (np.hypot(*(here - goal).T) > s.stall_distance)
         slow_for[idx] = np.where(stalled, slow_for[idx] + 1, 0)
         if s.random_walk:
@@ -141,7 +142,7 @@ def roll_out(
             walk_age[idx[start_walk]] = 0
         walk = walking[idx]
         heading[idx[walk]] += turns[k, idx[walk]]
-        v = field.velocity(here, attractive_noise=noise[k, idx]) if s.noise_std > 0 else clean
+        v = cap(uncapped + noise[k, idx], field.max_speed) if s.noise_std > 0 else clean
         v[walk] = field.v_max * np.column_stack([np.cos(heading[idx[walk]]), np.sin(heading[idx[walk]])])
         proposed = here + s.dt * v
         ok = field.obstacles.segments_free(here, proposed)
@@ -188,6 +189,16 @@ def roll_out(
     return results
 
 
+def planned_points(field: PotentialField, rollout: Rollout, *, simplify: bool = True) -> FloatArray:
+    """The ``(K, 2)`` waypoints a plan hands on: the rollout's trajectory, ended on the goal when it succeeded
+    (the descent stops ``goal_tolerance`` short of it), then simplified against the field's obstacles."""
+    points = rollout.trajectory
+    goal = np.asarray(field.goal, dtype=np.float64)
+    if rollout.success and field.obstacles.segments_free(points[-1:], goal[None, :])[0]:
+        points = np.vstack([points, goal])
+    return simplify_path(points, field.obstacles.segments_free) if simplify else points
+
+
 def plan_potential_field(
     field: PotentialField,
     start: tuple[float, float, float],
@@ -198,15 +209,12 @@ def plan_potential_field(
 ) -> PlanResult:
     """One potential-field plan from ``start`` ``(x, y, yaw)`` to the field's goal.
 
-    The raw trajectory is shortened by :func:`mrs_nav.path_simplification.simplify_path` against the field's
-    obstacles when ``simplify`` is true. The path's last waypoint keeps the heading of its last segment.
+    The waypoints are :func:`planned_points` of the rollout, each with the heading of the segment leaving it;
+    the first keeps the start's yaw and the last the heading of the segment reaching it.
     """
     began = time.perf_counter()
     (rollout,) = roll_out(field, (start[0], start[1]), [seed], settings)
-    points = rollout.trajectory
-    if simplify:
-        points = simplify_path(points, field.obstacles.segments_free)
-    path = headings_along(points)
+    path = headings_along(planned_points(field, rollout, simplify=simplify))
     path[0, 2] = start[2]
     elapsed = time.perf_counter() - began
     return PlanResult(

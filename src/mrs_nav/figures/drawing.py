@@ -19,16 +19,26 @@ from mrs_nav.obstacles import Obstacles
 OBSTACLE_COLOUR = "#7f7f7f"
 
 
-def new_axes(title: str, limits: tuple[float, float, float, float]) -> tuple[Any, Any]:
+Limits = tuple[float, float, float, float]
+
+
+def new_axes(title: str, limits: Limits) -> tuple[Any, Any]:
     """A square figure with equal axes over ``limits`` = (xmin, ymin, xmax, ymax) metres."""
-    fig, ax = plt.subplots(figsize=(6.0, 6.0), dpi=100)
-    ax.set_title(title, fontsize=10)
-    ax.set_xlim(limits[0], limits[2])
-    ax.set_ylim(limits[1], limits[3])
-    ax.set_aspect("equal")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
+    fig, (ax,) = new_panels([title], [limits])
     return fig, ax
+
+
+def new_panels(titles: list[str], limits: list[Limits]) -> tuple[Any, list[Any]]:
+    """A row of equal-axis panels, one per title, each over its ``limits`` (metres)."""
+    fig, axes = plt.subplots(1, len(titles), figsize=(6.0 * len(titles), 6.0), dpi=100, squeeze=False)
+    for ax, title, lim in zip(axes[0], titles, limits, strict=True):
+        ax.set_title(title, fontsize=10)
+        ax.set_xlim(lim[0], lim[2])
+        ax.set_ylim(lim[1], lim[3])
+        ax.set_aspect("equal")
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+    return fig, list(axes[0])
 
 
 def draw_obstacles(ax: Any, obstacles: Obstacles) -> None:
@@ -43,7 +53,7 @@ def draw_field(ax: Any, points: FloatArray, velocities: FloatArray) -> None:
     ax.quiver(points[:, 0], points[:, 1], velocities[:, 0], velocities[:, 1], color="#1f77b4", alpha=0.6, zorder=1)
 
 
-def grid(limits: tuple[float, float, float, float], count: int = 25) -> FloatArray:
+def grid(limits: Limits, count: int = 25) -> FloatArray:
     xs = np.linspace(limits[0], limits[2], count)
     ys = np.linspace(limits[1], limits[3], count)
     gx, gy = np.meshgrid(xs, ys)

@@ -5,7 +5,7 @@
 3. combined field: around the cylinder to the goal;
 4. cylinder at the origin: noise-free descent stuck at the saddle point, and the noisy descent (1e);
 5. two-cylinder local minimum: the trajectory with its random-walk steps (1f);
-6. the simplification algorithm: raw trajectory, forward shortcuts only, and with back-tracking;
+6. the simplification algorithm: forward shortcuts and back-tracking on a small case, then on Figure 5's path;
 7. the simplified trajectory against the true shortest path.
 """
 
@@ -16,20 +16,21 @@ from typing import Any
 
 import numpy as np
 
-from mrs_nav.figures.drawing import draw_field, draw_obstacles, grid, new_axes, save
+from mrs_nav.figures.drawing import Limits, draw_field, draw_obstacles, grid, new_axes, new_panels, save
 from mrs_nav.geometry import FloatArray
+from mrs_nav.obstacles import Obstacles
 from mrs_nav.path_simplification import simplify_path
 from mrs_nav.planning import path_length
 from mrs_nav.potential_field import FieldMode, PotentialField, trace
 from mrs_nav.potential_field_scenarios import Scenario, course_arena, symmetric_trap, two_cylinder_trap
-from mrs_nav.randomized_potential_field import EscapeSettings, Rollout, roll_out
+from mrs_nav.randomized_potential_field import EscapeSettings, Rollout, planned_points, roll_out
 from mrs_nav.shortest_path import shortest_path
 
 ARENA_LIMITS = (-2.2, -2.2, 2.2, 2.2)
 TRAP_LIMITS = (-2.0, -1.5, 2.0, 1.5)
 
 
-def _scene(title: str, scenario: Scenario, limits: tuple[float, float, float, float]) -> tuple[Any, Any]:
+def _scene(title: str, scenario: Scenario, limits: Limits) -> tuple[Any, Any]:
     fig, ax = new_axes(title, limits)
     draw_obstacles(ax, scenario.obstacles)
     ax.plot(*scenario.start, "o", color="tab:green", label="start", zorder=4)
@@ -37,13 +38,13 @@ def _scene(title: str, scenario: Scenario, limits: tuple[float, float, float, fl
     return fig, ax
 
 
-def _with_field(ax: Any, field: PotentialField, mode: FieldMode, limits: tuple[float, float, float, float]) -> None:
+def _with_field(ax: Any, field: PotentialField, mode: FieldMode, limits: Limits) -> None:
     points = grid(limits)
     points = points[~field.obstacles.contains(points)]
     draw_field(ax, points, field.velocity(points, mode))
 
 
-def _field_figure(out: Path, number: int, title: str, mode: FieldMode) -> Path:
+def _field_figure(out: Path, number: int, title: str, mode: FieldMode, slug: str) -> Path:
     scenario = course_arena()
     field = scenario.field()
     fig, ax = _scene(f"Figure {number}: {title}", scenario, ARENA_LIMITS)
@@ -51,7 +52,7 @@ def _field_figure(out: Path, number: int, title: str, mode: FieldMode) -> Path:
     path = trace(field, scenario.start, mode=mode)
     ax.plot(path[:, 0], path[:, 1], color="tab:orange", linewidth=2, label="trajectory", zorder=3)
     ax.legend(loc="lower right", fontsize=8)
-    return save(fig, out / f"figure{number}_{mode.value}_field.png")
+    return save(fig, out / f"figure{number}_{slug}_field.png")
 
 
 def _rollout(scenario: Scenario, seed: int, settings: EscapeSettings) -> Rollout:
@@ -98,15 +99,27 @@ def _plot_path(ax: Any, path: FloatArray, style: str, colour: str, label: str) -
 
 
 def _figure6(out: Path, scenario: Scenario, rollout: Rollout) -> Path:
-    fig, ax = _scene("Figure 6: simplification by shortcuts and back-tracking", scenario, TRAP_LIMITS)
-    free = scenario.obstacles.segments_free
-    raw = rollout.trajectory
-    ax.plot(raw[:, 0], raw[:, 1], color="tab:orange", linewidth=0.8, alpha=0.6, label="raw trajectory")
-    forward = simplify_path(raw, free, backtrack=False)
-    _plot_path(ax, forward, "o--", "tab:blue", "forward shortcuts only")
-    final = simplify_path(raw, free)
-    _plot_path(ax, final, "s-", "tab:red", "with back-tracking")
-    ax.legend(loc="lower right", fontsize=8)
+    fig, (left, right) = new_panels(
+        ["Figure 6a: forward shortcuts, then back-tracking", "Figure 6b: the random-walk trajectory simplified"],
+        [(-0.5, -0.5, 1.5, 2.5), TRAP_LIMITS],
+    )
+    # 6a: from A the forward pass stops at B (the disc hides C), goes on from B to D, and back-tracking then
+    # finds that A sees D directly and drops B.
+    disc = Obstacles.from_circles([[0.5, 0.5, 0.1]])
+    draw_obstacles(left, disc)
+    raw = np.array([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 2.0)])
+    left.plot(raw[:, 0], raw[:, 1], "o-", color="tab:orange", label="trajectory")
+    for name, point in zip("ABCD", raw, strict=True):
+        left.annotate(name, point, textcoords="offset points", xytext=(6, 6))
+    _plot_path(left, simplify_path(raw, disc.segments_free, backtrack=False), "--", "tab:blue", "forward pass")
+    _plot_path(left, simplify_path(raw, disc.segments_free), "-", "tab:red", "with back-tracking")
+    left.legend(loc="upper right", fontsize=8)
+
+    draw_obstacles(right, scenario.obstacles)
+    trajectory = planned_points(scenario.field(), rollout, simplify=False)
+    right.plot(*trajectory.T, color="tab:orange", linewidth=0.8, alpha=0.6, label="raw trajectory")
+    _plot_path(right, planned_points(scenario.field(), rollout), "s-", "tab:red", "simplified")
+    right.legend(loc="lower right", fontsize=8)
     return save(fig, out / "figure6_simplification_steps.png")
 
 
@@ -114,7 +127,7 @@ def _figure7(out: Path, scenario: Scenario, rollout: Rollout) -> Path:
     fig, ax = _scene("Figure 7: random walk escape after simplification", scenario, TRAP_LIMITS)
     raw = rollout.trajectory
     ax.plot(raw[:, 0], raw[:, 1], color="tab:orange", linewidth=0.8, alpha=0.4, label="raw trajectory")
-    _plot_path(ax, simplify_path(raw, scenario.obstacles.segments_free), "-", "tab:red", "simplified")
+    _plot_path(ax, planned_points(scenario.field(), rollout), "-", "tab:red", "simplified")
     best = shortest_path(scenario.start, scenario.goal, scenario.obstacles)
     _plot_path(ax, best.points, ":", "black", "true shortest")
     ax.legend(loc="lower right", fontsize=8)
@@ -124,9 +137,9 @@ def _figure7(out: Path, scenario: Scenario, rollout: Rollout) -> Path:
 def make_figures(out_dir: Path, seed: int) -> list[Path]:
     """Write Figures 1-7 as PNGs into ``out_dir``; the random ones use ``seed``. Returns the files."""
     written = [
-        _field_figure(out_dir, 1, "attractive field only", FieldMode.ATTRACTIVE),
-        _field_figure(out_dir, 2, "repulsive field only", FieldMode.REPULSIVE),
-        _field_figure(out_dir, 3, "combined field", FieldMode.COMBINED),
+        _field_figure(out_dir, 1, "attractive field only", FieldMode.ATTRACTIVE, "attractive"),
+        _field_figure(out_dir, 2, "repulsive field only", FieldMode.REPULSIVE, "repulsive"),
+        _field_figure(out_dir, 3, "combined field", FieldMode.COMBINED, "combined"),
         _figure4(out_dir, seed),
     ]
     scenario, rollout = _walk_rollout(seed)

@@ -1,0 +1,101 @@
+"""Reading and writing ROS 1 bags with rosbags' Noetic type store (plus ``tf2_msgs/TFMessage``).
+
+Errors become :class:`mrs_nav.errors.BagError` naming the bag (and the topic when one is missing).
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+from rosbags.rosbag1 import Reader, Writer
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+from mrs_nav.errors import BagError
+
+TF_MESSAGE = "tf2_msgs/msg/TFMessage"
+_TF_MESSAGE_DEF = "geometry_msgs/TransformStamped[] transforms\n"
+
+
+@functools.cache
+def typestore() -> Any:
+    """The ROS 1 Noetic type store with ``tf2_msgs/TFMessage`` registered (Noetic's store lacks it)."""
+    store = get_typestore(Stores.ROS1_NOETIC)
+    store.register(get_types_from_msg(_TF_MESSAGE_DEF, TF_MESSAGE))
+    return store
+
+
+class BagWriter:
+    """Write messages to a new ROS 1 bag (LZ4-compressed chunks unless ``compress=False``)."""
+
+    def __init__(self, path: Path, *, compress: bool = True) -> None:
+        self.path = path
+        self._writer = Writer(path)
+        if compress:
+            self._writer.set_compression(Writer.CompressionFormat.LZ4)  # must precede open()
+        self._connections: dict[str, Any] = {}
+
+    def __enter__(self) -> BagWriter:
+        try:
+            self.path.unlink(missing_ok=True)
+            self._writer.open()
+        except Exception as err:
+            raise BagError(f"cannot create bag {self.path}: {err}") from None
+        return self
+
+    def __exit__(
+        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self._writer.close()
+
+    def write(self, topic: str, msgtype: str, stamp_ns: int, message: Any, *, latching: bool = False) -> None:
+        """Append ``message`` (a rosbags message object of ``msgtype``) on ``topic`` at ``stamp_ns``."""
+        store = typestore()
+        conn = self._connections.get(topic)
+        if conn is None:
+            conn = self._writer.add_connection(topic, msgtype, typestore=store, latching=int(latching))
+            self._connections[topic] = conn
+        self._writer.write(conn, stamp_ns, store.serialize_ros1(message, msgtype))
+
+
+def bag_topics(path: Path) -> dict[str, str]:
+    """``{topic: message type}`` of a bag."""
+    try:
+        with Reader(path) as reader:
+            return {topic: info.msgtype for topic, info in reader.topics.items() if info.msgtype}
+    except Exception as err:
+        raise BagError(f"cannot read bag {path}: {err}") from None
+
+
+def read_messages(path: Path, topics: Iterable[str], *, required: Iterable[str] = ()) -> Iterator[tuple[str, int, Any]]:
+    """Yield ``(topic, bag time ns, message)`` for ``topics`` in time order.
+
+    Raises :class:`BagError` when the bag cannot be read or lacks one of the ``required`` topics.
+    """
+    wanted = set(topics)
+    store = typestore()
+    try:
+        reader = Reader(path)
+        reader.open()
+    except Exception as err:
+        raise BagError(f"cannot read bag {path}: {err}") from None
+    try:
+        missing = sorted(set(required) - set(reader.topics))
+        if missing:
+            present = ", ".join(sorted(reader.topics)) or "none"
+            raise BagError(f"bag {path} has no {', '.join(missing)} topic (topics: {present})")
+        connections = [c for c in reader.connections if c.topic in wanted]
+        if not connections:  # rosbags reads every connection when given none
+            return
+        try:
+            for conn, stamp, raw in reader.messages(connections=connections):
+                yield conn.topic, stamp, store.deserialize_ros1(raw, conn.msgtype)
+        except BagError:
+            raise
+        except Exception as err:
+            raise BagError(f"bag {path} is damaged: {err}") from None
+    finally:
+        reader.close()

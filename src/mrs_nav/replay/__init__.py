@@ -1,0 +1,1 @@
+"""Offline replay of recorded bags through the core algorithms (no ROS master)."""

@@ -1,0 +1,240 @@
+"""Scan-to-map matching: multi-resolution correlative search, then Gauss-Newton refinement.
+
+The map is turned into a distance field ``D`` (metres to the nearest occupied cell, truncated) over the window
+the scan can reach, and into a likelihood field ``L = exp(-D^2 / (2 sigma^2))``.
+
+1. Coarse search (Olson, "Real-time correlative scan matching", ICRA 2009): for every candidate heading in the
+   angular window, every translation on a grid of ``COARSE`` cells is scored with ``L`` max-pooled over
+   ``COARSE`` x ``COARSE`` cells, an upper bound of the fine score anywhere in that block. A weak quadratic
+   penalty on the distance from the odometry prediction breaks ties along corridors.
+2. Fine search: the best coarse blocks are searched cell by cell with a finer angular step.
+3. Refinement: point-to-point ICP (Gauss-Newton, Huber-weighted) where each scan point is paired with the mean
+   end point of its nearest occupied cell (found through the distance transform's nearest-cell indices), for
+   sub-cell, sub-degree accuracy; pairs farther than 4 cells apart are ignored.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+from scipy import ndimage
+
+from mrs_nav.geometry import FloatArray, Pose2D, wrap_angle
+from mrs_nav.slam.grid import LogOddsGrid
+
+COARSE = 4  # cells per coarse translation step
+COARSE_ANGLE = math.radians(1.0)
+FINE_ANGLE = math.radians(0.25)
+TOP_CANDIDATES = 8
+PRIOR_WEIGHT = 0.02  # score units per (window half-width)^2 of deviation from the odometry prediction
+
+
+@dataclass(frozen=True)
+class MatchResult:
+    """A laser pose in the map frame and how well the scan fits there.
+
+    ``score``: mean likelihood of the points (0..1); ``inlier_fraction``: share of points within 1.5 cells of
+    an occupied cell after refinement.
+    """
+
+    pose: Pose2D
+    score: float
+    inlier_fraction: float
+
+
+class DistanceField:
+    """Truncated distance (m) to the nearest occupied cell over a window of a grid, padded by ``pad`` cells."""
+
+    def __init__(self, grid: LogOddsGrid, bounds: tuple[float, float, float, float], max_distance: float, pad: int):
+        res = grid.resolution
+        x0 = max(0, math.floor((bounds[0] - grid.origin_x) / res))
+        y0 = max(0, math.floor((bounds[1] - grid.origin_y) / res))
+        x1 = min(grid.width, math.ceil((bounds[2] - grid.origin_x) / res) + 1)
+        y1 = min(grid.height, math.ceil((bounds[3] - grid.origin_y) / res) + 1)
+        self.resolution = res
+        self.max_distance = max_distance
+        occ = grid.occupied()[y0:y1, x0:x1] if x1 > x0 and y1 > y0 else np.zeros((0, 0), dtype=bool)
+        self.empty = not bool(occ.any())
+        if self.empty:
+            dist = np.full((1, 1), max_distance, dtype=np.float64)
+            near = np.zeros((2, 1, 1), dtype=np.int64)
+        else:
+            edt, near = ndimage.distance_transform_edt(~occ, return_indices=True)
+            dist = np.minimum(edt * res, max_distance)
+        self.distance: FloatArray = np.pad(dist, pad, constant_values=max_distance)
+        self.origin_x = grid.origin_x + (x0 - pad) * res
+        self.origin_y = grid.origin_y + (y0 - pad) * res
+        # Grid indices of the nearest occupied cell, per window cell (-1 in the padding).
+        self.grid = grid
+        self.near_iy = np.pad(near[0] + y0, pad, constant_values=-1)
+        self.near_ix = np.pad(near[1] + x0, pad, constant_values=-1)
+
+    def nearest_hits(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Mean hit point (m) of the occupied cell nearest to each point; NaN outside the window."""
+        ix, iy = self.cells(x, y)
+        niy, nix = self.near_iy[iy, ix], self.near_ix[iy, ix]
+        inside = niy >= 0
+        hx, hy = self.grid.mean_hits(np.maximum(niy, 0), np.maximum(nix, 0))
+        return np.where(inside, hx, np.nan), np.where(inside, hy, np.nan)
+
+    def cells(self, x: FloatArray, y: FloatArray) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+        """Cell indices of points, clipped into the padded window."""
+        h, w = self.distance.shape
+        ix = np.clip(np.floor((x - self.origin_x) / self.resolution).astype(np.int64), 0, w - 1)
+        iy = np.clip(np.floor((y - self.origin_y) / self.resolution).astype(np.int64), 0, h - 1)
+        return ix, iy
+
+    def interpolate(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Bilinear ``D`` at points and its gradient ``(dD/dx, dD/dy)`` (unitless)."""
+        h, w = self.distance.shape
+        u = (x - self.origin_x) / self.resolution - 0.5
+        v = (y - self.origin_y) / self.resolution - 0.5
+        u = np.clip(u, 0.0, w - 1.001)
+        v = np.clip(v, 0.0, h - 1.001)
+        i, j = np.floor(u).astype(np.int64), np.floor(v).astype(np.int64)
+        fu, fv = u - i, v - j
+        d = self.distance
+        d00, d01, d10, d11 = d[j, i], d[j, i + 1], d[j + 1, i], d[j + 1, i + 1]
+        value = (1 - fu) * (1 - fv) * d00 + fu * (1 - fv) * d01 + (1 - fu) * fv * d10 + fu * fv * d11
+        gx = ((1 - fv) * (d01 - d00) + fv * (d11 - d10)) / self.resolution
+        gy = ((1 - fu) * (d10 - d00) + fu * (d11 - d01)) / self.resolution
+        return value, gx, gy
+
+
+def thin_points(points: FloatArray, spacing: float) -> FloatArray:
+    """Keep one point per ``spacing``-sized cell (laser frame), so dense near returns do not dominate."""
+    if points.shape[0] == 0:
+        return points
+    keys = np.floor(points / spacing).astype(np.int64)
+    _, first = np.unique(keys[:, 0] * 1_000_003 + keys[:, 1], return_index=True)
+    return np.asarray(points[np.sort(first)], dtype=np.float64)
+
+
+class ScanMatcher:
+    """Aligns a scan (points in the laser frame) to a :class:`DistanceField` near a predicted laser pose."""
+
+    def __init__(self, sigma: float, search_linear: float, search_angular: float):
+        self.sigma = sigma
+        self.search_linear = search_linear
+        self.search_angular = search_angular
+
+    def match(self, field: DistanceField, points: FloatArray, prior: Pose2D) -> MatchResult:
+        """Best laser pose for ``points`` (N x 2, laser frame) near ``prior``; ``prior`` if nothing to match."""
+        if field.empty or points.shape[0] < 3:
+            return MatchResult(prior, 0.0, 0.0)
+        likelihood = np.exp(-(field.distance**2) / (2.0 * self.sigma**2))
+        # The coarse level also uses a wider likelihood: its 1-degree heading steps move far points by more
+        # than a cell, and a too-sharp score would rank the right block below a lucky wrong one.
+        sigma_c = max(self.sigma, 0.5 * COARSE * field.resolution)
+        wide = np.exp(-(field.distance**2) / (2.0 * sigma_c**2))
+        pooled = ndimage.maximum_filter(wide, size=COARSE + 1, mode="nearest")
+        res = field.resolution
+        n_lin = max(1, math.ceil(self.search_linear / (COARSE * res)))
+        n_ang = max(1, math.ceil(self.search_angular / COARSE_ANGLE))
+        coarse_offsets = np.arange(-n_lin, n_lin + 1) * COARSE
+        coarse_angles = np.arange(-n_ang, n_ang + 1) * COARSE_ANGLE
+        scores = self._scores(field, pooled, points, prior, angles=coarse_angles, offsets=coarse_offsets)
+        best: tuple[float, float, int, int] = (-math.inf, 0.0, 0, 0)
+        for flat in np.argsort(scores, axis=None)[::-1][:TOP_CANDIDATES]:
+            a, ox, oy = np.unravel_index(flat, scores.shape)
+            fine_angles = coarse_angles[a] + np.arange(-2, 3) * FINE_ANGLE
+            half = COARSE // 2
+            fine_offsets = np.arange(-half, half + 1)
+            fine = self._scores(
+                field,
+                likelihood,
+                points,
+                prior,
+                angles=fine_angles,
+                offsets=fine_offsets,
+                base=(int(coarse_offsets[ox]), int(coarse_offsets[oy])),
+            )
+            fa, fx, fy = np.unravel_index(int(np.argmax(fine)), fine.shape)
+            if fine[fa, fx, fy] > best[0]:
+                best = (
+                    float(fine[fa, fx, fy]),
+                    float(fine_angles[fa]),
+                    int(coarse_offsets[ox] + fine_offsets[fx]),
+                    int(coarse_offsets[oy] + fine_offsets[fy]),
+                )
+        _, dyaw, dx, dy = best
+        start = Pose2D(prior.x + dx * res, prior.y + dy * res, wrap_angle(prior.yaw + dyaw))
+        pose = self.refine(field, points, start)
+        return self._evaluate(field, likelihood, points, pose)
+
+    def _scores(
+        self,
+        field: DistanceField,
+        table: FloatArray,
+        points: FloatArray,
+        prior: Pose2D,
+        *,
+        angles: FloatArray,
+        offsets: npt.NDArray[np.int64],
+        base: tuple[int, int] = (0, 0),
+    ) -> FloatArray:
+        """Mean table value minus the prior penalty, for every (angle, x offset, y offset) in cells."""
+        res = field.resolution
+        yaw = prior.yaw + angles
+        c, s = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
+        wx = prior.x + c * points[:, 0] - s * points[:, 1] + base[0] * res
+        wy = prior.y + s * points[:, 0] + c * points[:, 1] + base[1] * res
+        ix, iy = field.cells(wx, wy)  # (A, N)
+        h, w = table.shape
+        # Offsets within the padding never leave the padded table; clip anyway for very far points.
+        cx = np.clip(ix[:, None, :] + offsets[None, :, None], 0, w - 1)  # (A, K, N)
+        cy = np.clip(iy[:, None, :] + offsets[None, :, None], 0, h - 1)
+        flat = cy[:, None, :, :] * w + cx[:, :, None, :]  # (A, Kx, Ky, N)
+        score = table.ravel()[flat].mean(axis=3)
+        ox = (base[0] + offsets) * res / max(self.search_linear, res)
+        oy = (base[1] + offsets) * res / max(self.search_linear, res)
+        oa = angles / max(self.search_angular, FINE_ANGLE)
+        penalty = PRIOR_WEIGHT * (oa[:, None, None] ** 2 + ox[None, :, None] ** 2 + oy[None, None, :] ** 2)
+        return np.asarray(score - penalty, dtype=np.float64)
+
+    def refine(self, field: DistanceField, points: FloatArray, start: Pose2D, iterations: int = 10) -> Pose2D:
+        """Point-to-point ICP from ``start`` against the mean hit points of the nearest occupied cells."""
+        res = field.resolution
+        x, y, yaw = start.x, start.y, start.yaw
+        cutoff = 4.0 * res
+        huber = 0.5 * res
+        for _ in range(iterations):
+            c, s = math.cos(yaw), math.sin(yaw)
+            wx = x + c * points[:, 0] - s * points[:, 1]
+            wy = y + s * points[:, 0] + c * points[:, 1]
+            mx, my = field.nearest_hits(wx, wy)
+            rx, ry = wx - mx, wy - my
+            dist = np.hypot(rx, ry)
+            use = np.isfinite(dist) & (dist < cutoff)
+            if int(use.sum()) < 3:
+                break
+            rx, ry, dist = rx[use], ry[use], dist[use]
+            px, py = points[use, 0], points[use, 1]
+            weight = np.where(dist <= huber, 1.0, huber / np.maximum(dist, 1e-12))
+            # residual r = R p + t - m; dr/dtheta = (-s px - c py, c px - s py)
+            dtx, dty = -s * px - c * py, c * px - s * py
+            n = rx.size
+            jac = np.zeros((2 * n, 3))
+            jac[:n, 0] = 1.0
+            jac[n:, 1] = 1.0
+            jac[:n, 2] = dtx
+            jac[n:, 2] = dty
+            r = np.concatenate([rx, ry])
+            w = np.concatenate([weight, weight])
+            hess = (jac * w[:, None]).T @ jac + np.diag([1e-9, 1e-9, 1e-9])
+            step = -np.linalg.solve(hess, (jac * w[:, None]).T @ r)
+            x, y, yaw = x + step[0], y + step[1], yaw + step[2]
+            if abs(step[0]) + abs(step[1]) < 1e-5 and abs(step[2]) < 1e-5:
+                break
+        return Pose2D(x, y, wrap_angle(yaw))
+
+    def _evaluate(self, field: DistanceField, likelihood: FloatArray, points: FloatArray, pose: Pose2D) -> MatchResult:
+        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
+        wx = pose.x + c * points[:, 0] - s * points[:, 1]
+        wy = pose.y + s * points[:, 0] + c * points[:, 1]
+        d, _, _ = field.interpolate(wx, wy)
+        score = float(np.mean(np.exp(-(d**2) / (2.0 * self.sigma**2))))
+        return MatchResult(pose, score, float(np.mean(d < 1.5 * field.resolution)))

@@ -1,0 +1,65 @@
+"""Trajectory error metrics: absolute trajectory error after SE(2) alignment, and relative pose error.
+
+ATE (Sturm et al., IROS 2012): the estimate is rotated and translated (no scale) onto the ground truth by the
+least-squares rigid fit of the positions (Umeyama / Kabsch in 2-D); the RMS of the remaining position errors
+(m) and of the heading errors (deg, after the same rotation) are reported.
+RPE (Kuemmerle et al., Autonomous Robots 2009): for consecutive pose pairs, the error of the estimated relative
+motion against the true one, ``inv(T_gt_i^-1 T_gt_j) (T_est_i^-1 T_est_j)``; mean translation (m) and
+rotation (deg).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from mrs_nav.errors import InvalidInputError
+from mrs_nav.geometry import FloatArray, Pose2D, wrap_angles
+
+
+@dataclass(frozen=True)
+class TrajectoryErrors:
+    """ATE RMS (m, deg) after alignment and mean RPE over consecutive poses (m, deg)."""
+
+    ate_rmse_m: float
+    ate_rmse_deg: float
+    rpe_trans_mean_m: float
+    rpe_rot_mean_deg: float
+
+
+def align_se2(estimate: FloatArray, truth: FloatArray) -> tuple[float, FloatArray]:
+    """Rotation angle (rad) and translation (2,) that best map ``estimate`` positions onto ``truth`` (N x 2)."""
+    mu_e, mu_t = estimate.mean(axis=0), truth.mean(axis=0)
+    e, t = estimate - mu_e, truth - mu_t
+    angle = math.atan2(float(np.sum(e[:, 0] * t[:, 1] - e[:, 1] * t[:, 0])), float(np.sum(e * t)))
+    rot = np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
+    return angle, np.asarray(mu_t - rot @ mu_e, dtype=np.float64)
+
+
+def trajectory_errors(estimate: Sequence[Pose2D], truth: Sequence[Pose2D]) -> TrajectoryErrors:
+    """ATE and RPE of ``estimate`` against ``truth`` (same length, corresponding poses)."""
+    if len(estimate) != len(truth) or len(estimate) < 2:
+        raise InvalidInputError(f"trajectory errors need >= 2 matched poses, got {len(estimate)} and {len(truth)}")
+    est = np.array([[p.x, p.y, p.yaw] for p in estimate])
+    gt = np.array([[p.x, p.y, p.yaw] for p in truth])
+    angle, shift = align_se2(est[:, :2], gt[:, :2])
+    c, s = math.cos(angle), math.sin(angle)
+    aligned = np.stack([c * est[:, 0] - s * est[:, 1] + shift[0], s * est[:, 0] + c * est[:, 1] + shift[1]], axis=1)
+    pos_err = np.linalg.norm(aligned - gt[:, :2], axis=1)
+    yaw_err = wrap_angles(est[:, 2] + angle - gt[:, 2])
+    trans, rot = [], []
+    for i in range(1, len(estimate)):
+        d_est = estimate[i].relative_to(estimate[i - 1])
+        d_gt = truth[i].relative_to(truth[i - 1])
+        err = d_est.relative_to(d_gt)
+        trans.append(math.hypot(err.x, err.y))
+        rot.append(abs(err.yaw))
+    return TrajectoryErrors(
+        ate_rmse_m=float(np.sqrt(np.mean(pos_err**2))),
+        ate_rmse_deg=math.degrees(float(np.sqrt(np.mean(yaw_err**2)))),
+        rpe_trans_mean_m=float(np.mean(trans)),
+        rpe_rot_mean_deg=math.degrees(float(np.mean(rot))),
+    )

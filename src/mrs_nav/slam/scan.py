@@ -1,0 +1,77 @@
+"""A planar laser scan as plain data, and its split into hits and free-space-only beams.
+
+As in gmapping: NaN, readings below ``range_min`` and readings at or beyond the range limit (``+inf`` is "no
+return" in REP 117; SICK lasers report their maximum) are ignored, since a missing return says nothing reliable
+about where free space ends (glass, black surfaces). Readings beyond the usable range ``maxUrange`` but within
+the limit clear free space up to ``maxUrange`` and mark no obstacle.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mrs_nav.errors import InvalidInputError
+from mrs_nav.geometry import FloatArray
+
+
+@dataclass(frozen=True)
+class LaserScanData:
+    """Ranges (m) of beams at ``angle_min + i * angle_increment`` (rad) in the laser frame."""
+
+    angle_min: float
+    angle_increment: float
+    range_min: float
+    range_max: float
+    ranges: FloatArray
+
+    def __post_init__(self) -> None:
+        for name in ("angle_min", "angle_increment", "range_min", "range_max"):
+            if not math.isfinite(getattr(self, name)):
+                raise InvalidInputError(f"laser scan {name} must be finite, got {getattr(self, name)}")
+        if self.range_max <= self.range_min or self.range_min < 0.0:
+            raise InvalidInputError(f"laser scan range limits are invalid: {self.range_min}..{self.range_max}")
+        if self.ranges.ndim != 1:
+            raise InvalidInputError(f"laser scan ranges must be one-dimensional, got shape {self.ranges.shape}")
+
+    @property
+    def angles(self) -> FloatArray:
+        return np.asarray(self.angle_min + self.angle_increment * np.arange(self.ranges.size), dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class BeamSplit:
+    """Beams of a scan sorted by what they say about the world, in the laser frame.
+
+    ``hit_*``: beams that ended on an obstacle within the usable range (angle rad, range m).
+    ``free_*``: beams that only clear free space, up to ``free_ranges`` (longer than the usable range).
+    """
+
+    hit_angles: FloatArray
+    hit_ranges: FloatArray
+    free_angles: FloatArray
+    free_ranges: FloatArray
+
+
+def split_beams(scan: LaserScanData, max_usable: float, max_range: float = 0.0) -> BeamSplit:
+    """Classify the beams of ``scan``.
+
+    ``max_usable`` is gmapping's ``maxUrange``; ``max_range`` (``0``: the scan's ``range_max``) is gmapping's
+    ``maxRange``, where a reading means "no return".
+    """
+    r = np.asarray(scan.ranges, dtype=np.float64)
+    a = scan.angles
+    limit = scan.range_max if max_range <= 0.0 else min(max_range, scan.range_max)
+    with np.errstate(invalid="ignore"):
+        valid = np.isfinite(r) & (r >= scan.range_min) & (r < limit)
+    usable = min(max_usable, limit)
+    hit = valid & (r < usable)
+    free = valid & (r >= usable)
+    return BeamSplit(
+        hit_angles=a[hit],
+        hit_ranges=r[hit],
+        free_angles=a[free],
+        free_ranges=np.full(int(free.sum()), usable, dtype=np.float64),
+    )

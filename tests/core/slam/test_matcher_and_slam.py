@@ -1,0 +1,109 @@
+import math
+from dataclasses import astuple
+
+import numpy as np
+import pytest
+
+from mrs_nav.errors import InvalidInputError
+from mrs_nav.geometry import Pose2D
+from mrs_nav.motion_model import OdometryNoise, noisy_odometry
+from mrs_nav.slam import LaserScanData, Slam, SlamConfig
+from mrs_nav.slam.metrics import trajectory_errors
+
+from .synthetic import cast
+
+
+def test_matcher_recovers_a_pose_from_a_wrong_odometry_prediction():
+    slam = Slam(SlamConfig(linearUpdate=0.0, angularUpdate=0.0))
+    start = Pose2D(-1.0, 0.5, 0.2)
+    slam.add_scan(start, cast(start), 0.0)
+    true = Pose2D(-0.6, 0.4, 0.35)
+    odom_guess = Pose2D(-0.45, 0.3, 0.35 + math.radians(8.0))  # 18 cm and 8 degrees off
+    done = slam.add_scan(odom_guess, cast(true), 1.0)
+    assert done is not None
+    assert math.hypot(done.pose.x - true.x, done.pose.y - true.y) < 0.01
+    assert abs(done.pose.yaw - true.yaw) < math.radians(0.5)
+
+
+def drive(steps: int) -> list[Pose2D]:
+    """A loop around the room's pillar."""
+    poses = []
+    for i in range(steps):
+        a = 2.0 * math.pi * i / steps
+        poses.append(Pose2D(1.0 + 2.0 * math.cos(a), -0.5 + 1.6 * math.sin(a), a + math.pi / 2))
+    return poses
+
+
+def test_slam_corrects_noisy_odometry_on_a_loop():
+    truth = drive(80)
+    odom = noisy_odometry(truth, OdometryNoise(0.02, 0.01, 0.02, 0.001), np.random.default_rng(3))
+    slam = Slam(SlamConfig(linearUpdate=0.0, angularUpdate=0.0))
+    for i, (gt, od) in enumerate(zip(truth, odom, strict=True)):
+        slam.add_scan(od, cast(gt), float(i))
+    est = [p.pose for p in slam.processed]
+    slam_err = trajectory_errors(est, truth)
+    odom_err = trajectory_errors(odom, truth)
+    assert slam_err.ate_rmse_m < 0.03
+    assert slam_err.ate_rmse_deg < 1.0
+    assert odom_err.ate_rmse_m > 3 * slam_err.ate_rmse_m
+
+
+@pytest.mark.parametrize(
+    "ranges",
+    [np.full(360, np.nan), np.full(360, np.inf), np.zeros(0), np.full(17, 1.0), np.full(360, -1.0)],
+    ids=["nan", "inf", "empty", "short", "negative"],
+)
+def test_corrupt_scans_fall_back_to_odometry(ranges):
+    slam = Slam(SlamConfig(linearUpdate=0.0, angularUpdate=0.0))
+    slam.add_scan(Pose2D(0.0, 0.0, 0.0), cast(Pose2D(0.0, 0.0, 0.0)), 0.0)
+    before = slam.grid.logodds.copy()
+    odom = Pose2D(0.3, 0.0, 0.1)
+    bad = LaserScanData(-math.pi, 2 * math.pi / 360, 0.12, 3.5, ranges)
+    done = slam.add_scan(odom, bad, 1.0)
+    assert done is not None
+    if ranges.size != 17:  # 17 beams at 1 m are a (wrong but) valid scan: it may be matched and mapped
+        assert astuple(done.pose) == pytest.approx(astuple(odom))
+        assert np.array_equal(before, slam.grid.logodds)
+
+
+def test_update_gates():
+    slam = Slam(SlamConfig(linearUpdate=0.5, angularUpdate=0.4, temporalUpdate=3.0))
+    scan = cast(Pose2D(0.0, 0.0, 0.0))
+    assert slam.add_scan(Pose2D(0.0, 0.0, 0.0), scan, 0.0) is not None  # the first scan always counts
+    assert slam.add_scan(Pose2D(0.3, 0.0, 0.0), scan, 1.0) is None
+    assert slam.add_scan(Pose2D(0.0, 0.0, 0.3), scan, 1.5) is None
+    assert slam.add_scan(Pose2D(0.0, 0.0, 0.0), scan, 3.5) is not None  # temporalUpdate
+    assert slam.add_scan(Pose2D(0.51, 0.0, 0.0), scan, 3.6) is not None  # linearUpdate
+    assert slam.add_scan(Pose2D(0.51, 0.0, 0.41), scan, 3.7) is not None  # angularUpdate
+
+
+def test_map_to_odom_makes_the_corrected_pose():
+    slam = Slam(SlamConfig(linearUpdate=0.0, angularUpdate=0.0))
+    slam.add_scan(Pose2D(0.0, 0.0, 0.0), cast(Pose2D(0.0, 0.0, 0.0)), 0.0)
+    odom = Pose2D(0.5, 0.1, 0.2)
+    done = slam.add_scan(odom, cast(Pose2D(0.4, 0.0, 0.1)), 1.0)
+    assert done is not None
+    assert astuple(slam.map_to_odom.compose(odom)) == pytest.approx(astuple(done.pose), abs=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("values", "match"),
+    [
+        ({"delta": 0.0}, "delta"),
+        ({"maxUrange": -1}, "maxUrange"),
+        ({"linearUpdate": "fast"}, "linearUpdate"),
+        ({"particles": 30}, "unknown SLAM parameter 'particles'"),
+        ({"xmin": 5, "xmax": 1}, "extent"),
+        ({"sigma": float("nan")}, "sigma"),
+    ],
+)
+def test_config_rejects_nonsense(values, match):
+    with pytest.raises(InvalidInputError, match=match):
+        SlamConfig.from_mapping(values)
+
+
+def test_config_takes_gmapping_names_and_strings():
+    config = SlamConfig.from_mapping({"maxUrange": "3.0", "temporalUpdate": 0.5, "map_grows": "false"})
+    assert config.maxUrange == 3.0
+    assert config.temporalUpdate == 0.5
+    assert config.map_grows is False
