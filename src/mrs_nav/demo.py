@@ -50,12 +50,17 @@ class DemoConfig:
     seed: int = 0
     goal_timeout_s: float = 240.0  # sim seconds allowed per goal
     control_rate_hz: float = 10.0
-    map_period_s: float = 1.0
+    map_period_s: float | None = None  # None: the SLAM config's map_update_interval, as the SLAM node does
     planner: str = "rrt_star"
     plan_time_budget_s: float | None = 0.25
     plan_iterations: int | None = None
     navigator: NavigatorConfig = field(default_factory=NavigatorConfig)
     slam: SlamConfig = field(default_factory=SlamConfig)
+
+    @property
+    def map_period(self) -> float:
+        """Seconds between maps handed to the navigator."""
+        return self.slam.map_update_interval if self.map_period_s is None else self.map_period_s
 
     def __post_init__(self) -> None:
         if not self.goals:
@@ -63,7 +68,7 @@ class DemoConfig:
         for x, y in self.goals:
             if not (math.isfinite(x) and math.isfinite(y)):
                 raise InvalidInputError(f"goal ({x}, {y}) is not finite")
-        for name in ("goal_timeout_s", "control_rate_hz", "map_period_s"):
+        for name in ("goal_timeout_s", "control_rate_hz", "map_period"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise InvalidInputError(f"demo {name} must be a positive number, got {value}")
@@ -280,7 +285,7 @@ class Demo:
 
     def _publish_map(self, force: bool = False) -> None:
         now = self.sim.time
-        if not force and now - self._last_map < self.config.map_period_s:
+        if not force and now - self._last_map < self.config.map_period:
             return
         self._last_map = now
         grid = slam_grid(self.slam)
