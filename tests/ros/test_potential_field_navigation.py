@@ -38,7 +38,7 @@ def test_the_course_arena_goal_is_reached_without_contact(
             wait_for(lambda: proc.poll() is not None or status.has("reached"), 120.0, "the goal to be reached")
             assert proc.poll() is None, "roslaunch exited"
             reached_at = rospy.get_time()
-        t, x, y = truth.last()
+        _, x, y = truth.last()
         assert math.hypot(x - 1.5, y - 1.5) <= 0.2
         assert reached_at < SIM_TIME_BOUND
         assert truth.min_clearance() > FOOTPRINT_RADIUS

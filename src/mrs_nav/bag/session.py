@@ -13,13 +13,13 @@ from types import TracebackType
 from typing import Any
 
 import numpy as np
+
 from mrs_nav.bag.io import TF_MESSAGE, BagWriter, typestore
 from mrs_nav.bag.messages import LASER_SCAN, ODOMETRY, _header, _pose_parts, _time, laser_scan_message
-from mrs_nav.sim import LaserParams, Scan
-
 from mrs_nav.demo import laser_scan_data
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.occupancy_grid import OccupancyGrid
+from mrs_nav.sim import LaserParams, Scan
 
 CLOCK = "rosgraph_msgs/msg/Clock"
 TWIST = "geometry_msgs/msg/Twist"
