@@ -25,7 +25,7 @@ from tqdm import tqdm
 from mrs_nav.bench.results import markdown_table
 from mrs_nav.demo import Demo, DemoConfig
 from mrs_nav.errors import InvalidInputError, NoPathFoundError
-from mrs_nav.geometry import Pose2D
+from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.navigator import densify
 from mrs_nav.occupancy_grid import BURGER_RADIUS, OccupancyGrid
 from mrs_nav.planning import path_length
@@ -88,7 +88,7 @@ def shortest_path_length(
     return path_length(_shortcut(points, grid))
 
 
-def _shortcut(points: np.ndarray, grid: OccupancyGrid) -> np.ndarray:
+def _shortcut(points: FloatArray, grid: OccupancyGrid) -> FloatArray:
     """Greedy line-of-sight shortcutting: from each kept point jump to the farthest point visible from it."""
     kept, i = [points[0]], 0
     while i < len(points) - 1:

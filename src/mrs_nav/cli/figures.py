@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 # Figure-set modules under mrs_nav.figures, each exposing make_figures(out_dir, seed) -> list[Path].
-FIGURE_SETS = ("mrs_nav.figures.potential_field",)
+FIGURE_SETS = ("mrs_nav.figures.potential_field", "mrs_nav.figures.rrt")
 
 
 def register(subparsers: Any) -> None:

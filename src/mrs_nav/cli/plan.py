@@ -1,4 +1,4 @@
-"""``mrs-nav plan``: one planning query on a world or a list of circles.
+"""``mrs-nav plan``: one planning query on a map, a world or a list of circles.
 
 Exit status: 0 when the goal is reached, 2 when it is not (the planner's reason on stderr), 1 on bad input.
 Planners are looked up in :data:`PLANNERS`: a name on the command line -> a function of the parsed
@@ -13,6 +13,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from mrs_nav.cli import tree_planners
 from mrs_nav.cli.common import fail, parse_floats, print_json
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
@@ -59,13 +60,14 @@ def plan_with_potential_field(args: argparse.Namespace, start: Pose2D, goal: tup
 
 PLANNERS: dict[str, Planner] = {
     "potential_field": plan_with_potential_field,
+    **tree_planners.TREE_PLANNERS,
 }
 
 
 def register(subparsers: Any) -> None:
     parser: argparse.ArgumentParser = subparsers.add_parser(
         "plan",
-        help="one planning query on a world or a list of circles",
+        help="one planning query on a map, a world or a list of circles",
         description="Plan from --start to --goal. Exit 0 when the goal is reached, 2 when not, 1 on bad input.",
     )
     # Let "--start -1.5,-1.5,0" through: argparse takes only plain numbers like "-1.5" for negative values, and
@@ -73,6 +75,7 @@ def register(subparsers: Any) -> None:
     parser._negative_number_matcher = re.compile(r"^-\.?\d")
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--world", type=Path, help="Gazebo SDF .world file (its boxes and cylinders)")
+    source.add_argument("--map", type=Path, help="rrt / rrt_star: map_server map description (.yaml with its .pgm)")
     source.add_argument(
         "--circles", metavar="JSON", help="circular obstacles: JSON text or file, [[x, y, r], ...] in metres"
     )
@@ -83,6 +86,7 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "--max-steps", type=int, default=EscapeSettings().max_steps, help="potential field: integration steps"
     )
+    tree_planners.add_arguments(parser)
     parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
     parser.set_defaults(handler=run)
 

@@ -1,0 +1,336 @@
+"""RRT and RRT* (arc edges) on the course arena against OMPL's RRT*, and how their cost grows with map and tree size.
+
+The problem: ``worlds/simple.world`` rasterised at 0.05 m (the shipped ``maps/simple.yaml``), inflated by the
+Burger's 0.105 m, start (-1.5, -1.5, 0), goal (1.5, 1.5). For each seed: our RRT* for a time budget (first
+solution time, length at the end of the budget, time until the path is at most the target length), our RRT
+(first and only path) and OMPL's RRT* (PyPI ``ompl``) on the same grid with the same collision test (a state is
+valid when its cell is free in the same conservative mask our arc checks read; motions checked every 0.05 m).
+OMPL plans in R^2 with straight edges, a relaxation of our problem (no heading, no arcs), so its lengths can be
+shorter than any arc path. Scaling: first-solution time, iteration rate and peak memory (tracemalloc) on the
+arena and on a 20 m x 20 m office, and RRT* time and memory against the iteration count.
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import math
+import statistics
+import time
+import tracemalloc
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import partial
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mrs_nav.bench.results import markdown_table
+from mrs_nav.geometry import Pose2D
+from mrs_nav.occupancy_grid import BURGER_RADIUS, OCCUPIED, OccupancyGrid
+from mrs_nav.rasterize import rasterize_world
+from mrs_nav.rrt import RRTConfig, grow_rrt
+from mrs_nav.rrt_scenarios import CHECKOUT, COURSE_GOAL, COURSE_START, course_grid
+from mrs_nav.rrt_star import RRTStarConfig, grow_rrt_star
+from mrs_nav.world import load_world
+
+ARENA_START = COURSE_START
+ARENA_GOAL = COURSE_GOAL
+OFFICE_START = Pose2D(-5.0, -5.0, 0.0)
+OFFICE_GOAL = np.array([5.0, 5.0])
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--seeds", type=int, default=50, help="seeds per planner (default 50)")
+    parser.add_argument("--budget", type=float, default=0.5, help="RRT* time budget in seconds (default 0.5)")
+    parser.add_argument("--target", type=float, default=4.44, help="length target in metres (default 4.44)")
+    parser.add_argument("--no-ompl", action="store_true", help="skip the OMPL comparison")
+    parser.add_argument("--no-scaling", action="store_true", help="skip the map-size and iteration scaling")
+    parser.add_argument(
+        "--office",
+        type=Path,
+        default=CHECKOUT / "worlds" / "office.world",
+        help="20 m x 20 m world for the scaling runs (a synthetic grid is used when missing)",
+    )
+
+
+def synthetic_office(resolution: float = 0.05) -> OccupancyGrid:
+    """A 20 m x 20 m stand-in: outer walls and a 4 x 4 grid of rooms with 1 m doorways (deterministic)."""
+    n = round(20.0 / resolution)
+    values = np.zeros((n, n), dtype=np.int8)
+    wall = max(1, round(0.15 / resolution))
+    values[:wall, :] = values[-wall:, :] = values[:, :wall] = values[:, -wall:] = OCCUPIED
+    door = round(1.0 / resolution)
+    for k in range(1, 4):
+        c = k * n // 4
+        values[:, c : c + wall] = OCCUPIED
+        values[c : c + wall, :] = OCCUPIED
+        for m in range(4):
+            mid = m * n // 4 + n // 8
+            values[mid : mid + door, c : c + wall] = 0
+            values[c : c + wall, mid : mid + door] = 0
+    return OccupancyGrid(values, resolution, (-10.0, -10.0, 0.0))
+
+
+@dataclass(frozen=True)
+class Run:
+    """One planner run: success, first-solution time (s), final length (m), time to the target (s or inf)."""
+
+    success: bool
+    first_s: float
+    length: float
+    to_target_s: float
+    iterations: int
+
+
+def run_rrt_star(grid: OccupancyGrid, start: Pose2D, goal: Any, *, budget: float, target: float, seed: int) -> Run:
+    search = grow_rrt_star(start, goal, grid, RRTStarConfig(time_budget=budget), np.random.default_rng(seed))
+    r = search.result
+    to_target = next((t for _, t, length in search.history if length <= target), math.inf)
+    return Run(r.success, r.first_solution_s or math.inf, r.length_m, to_target, r.iterations)
+
+
+def run_rrt(grid: OccupancyGrid, start: Pose2D, goal: Any, seed: int) -> Run:
+    config = RRTConfig(iterations=None, time_budget=10.0)
+    r = grow_rrt(start, goal, grid, config, np.random.default_rng(seed)).result
+    return Run(r.success, r.first_solution_s or math.inf, r.length_m, math.inf, r.iterations)
+
+
+class OmplRRTStar:
+    """OMPL's RRT* in R^2 on ``grid``: validity = the cell of the state is free in the conservative mask."""
+
+    def __init__(self, grid: OccupancyGrid, start: Pose2D, goal: Any) -> None:
+        from ompl import base as ob  # noqa: PLC0415 - optional peer, imported only when benchmarking against it
+        from ompl import geometric as og  # noqa: PLC0415
+        from ompl import util as ou  # noqa: PLC0415
+
+        ou.setLogLevel(ou.LogLevel.LOG_NONE)
+        self.ob, self.og = ob, og
+        space = ob.RealVectorStateSpace(2)
+        bounds = ob.RealVectorBounds(2)
+        x0, y0, x1, y1 = grid.extent
+        bounds.setLow(0, x0)
+        bounds.setLow(1, y0)
+        bounds.setHigh(0, x1)
+        bounds.setHigh(1, y1)
+        space.setBounds(bounds)
+        self.setup = og.SimpleSetup(space)
+        free = grid.conservative_free_mask.ravel().tolist()
+        width, height, inv = grid.width, grid.height, 1.0 / grid.resolution
+
+        def valid(state: Any) -> bool:
+            # The same lookup as OccupancyGrid.lookup, scalar: OMPL calls back one state at a time.
+            col = math.floor((state[0] - x0) * inv)
+            row = math.floor((state[1] - y0) * inv)
+            return 0 <= col < width and 0 <= row < height and bool(free[row * width + col])
+
+        self.setup.setStateValidityChecker(valid)
+        si = self.setup.getSpaceInformation()
+        si.setStateValidityCheckingResolution(grid.resolution / space.getMaximumExtent())
+        s, g = space.allocState(), space.allocState()
+        s[0], s[1], g[0], g[1] = start.x, start.y, float(goal[0]), float(goal[1])
+        self.setup.setStartAndGoalStates(s, g, 0.01)
+        self.objective = ob.PathLengthOptimizationObjective(si)
+        self.setup.setOptimizationObjective(self.objective)
+        self.si = si
+
+    def solve(self, seconds: float, threshold: float) -> tuple[float, float]:
+        """Plan until a path of at most ``threshold`` m or ``seconds``; (planning time, length or inf)."""
+        self.setup.clear()
+        self.objective.setCostThreshold(self.ob.Cost(threshold))
+        self.setup.setPlanner(self.og.RRTstar(self.si))
+        self.setup.solve(seconds)
+        elapsed = float(self.setup.getLastPlanComputationTime())
+        if not self.setup.haveExactSolutionPath():
+            return math.inf, math.inf
+        return elapsed, float(self.setup.getSolutionPath().length())
+
+
+def _median(values: list[float]) -> float:
+    return statistics.median(values) if values else math.nan
+
+
+def _p90(values: list[float]) -> float:
+    return float(np.percentile(values, 90)) if values else math.nan
+
+
+def _fmt_ms(seconds: float) -> str:
+    return "-" if not math.isfinite(seconds) else f"{seconds * 1000:.1f}"
+
+
+def _ratio(a: float, b: float) -> str:
+    return "-" if not (math.isfinite(a) and math.isfinite(b) and b > 0) else f"{a / b:.2f}"
+
+
+def _arena_section(args: argparse.Namespace, grid: OccupancyGrid) -> tuple[str, list[str]]:
+    seeds = range(args.seeds)
+    star = [run_rrt_star(grid, ARENA_START, ARENA_GOAL, budget=args.budget, target=args.target, seed=s) for s in seeds]
+    plain = [run_rrt(grid, ARENA_START, ARENA_GOAL, s) for s in seeds]
+    rows: list[list[object]] = []
+    lines: list[str] = []
+
+    def row(name: str, runs: list[Run], length_note: str) -> None:
+        ok = [r for r in runs if r.success]
+        rows.append(
+            [
+                name,
+                f"{len(ok)}/{len(runs)}",
+                _fmt_ms(_median([r.first_s for r in ok])),
+                _fmt_ms(_p90([r.first_s for r in ok])),
+                f"{_median([r.length for r in ok]):.3f}{length_note}",
+                f"{max((r.length for r in ok), default=math.nan):.3f}",
+                _fmt_ms(_median([r.to_target_s for r in runs])),
+                f"{_median([float(r.iterations) for r in runs]):.0f}",
+            ]
+        )
+
+    row("mrs_nav RRT* (arcs)", star, f" after {args.budget:g} s")
+    row("mrs_nav RRT (arcs)", plain, " (first path)")
+    ompl_first: list[float] = []
+    ompl_target: list[float] = []
+    if not args.no_ompl:
+        ompl = OmplRRTStar(grid, ARENA_START, ARENA_GOAL)
+        runs = []
+        for _ in seeds:
+            first_s, _first_len = ompl.solve(5.0, math.inf)
+            _, length = ompl.solve(args.budget, 0.0)
+            target_s, _ = ompl.solve(5.0, args.target)
+            runs.append(Run(math.isfinite(first_s), first_s, length, target_s, 0))
+            ompl_first.append(first_s)
+            ompl_target.append(target_s)
+        row("OMPL RRT* (R^2, straight edges)", runs, f" after {args.budget:g} s")
+        rows[-1][-1] = "-"
+    header = [
+        "planner",
+        "success",
+        "first path median [ms]",
+        "first path p90 [ms]",
+        "length median [m]",
+        "length max [m]",
+        f"time to <= {args.target:g} m median [ms]",
+        "iterations",
+    ]
+    ours_first = _median([r.first_s for r in star])
+    ours_target = _median([r.to_target_s for r in star])
+    lines.append(
+        f"Ratios (median time; > 1 means mrs_nav RRT* is faster): RRT first path / RRT* first path "
+        f"{_ratio(_median([r.first_s for r in plain]), ours_first)}; RRT length / RRT* length "
+        f"{_ratio(_median([r.length for r in plain]), _median([r.length for r in star]))}"
+    )
+    if ompl_first:
+        lines.append(
+            f"; OMPL RRT* first path / ours {_ratio(_median(ompl_first), ours_first)}; "
+            f"OMPL RRT* time to <= {args.target:g} m / ours {_ratio(_median(ompl_target), ours_target)}."
+        )
+    verdict = _verdict(star, args)
+    return markdown_table(header, rows) + "\n\n" + "".join(lines) + "\n\n" + verdict, []
+
+
+def _verdict(star: list[Run], args: argparse.Namespace) -> str:
+    success = sum(r.success for r in star) == len(star)
+    first = _median([r.first_s for r in star])
+    length = _median([r.length for r in star])
+    checks = [
+        f"success 100%: {'yes' if success else 'NO'}",
+        f"first path median <= 20 ms: {'yes' if first <= 0.020 else 'NO'} ({first * 1000:.1f} ms)",
+        f"length median <= {args.target:g} m after {args.budget:g} s: {'yes' if length <= args.target else 'NO'} "
+        f"({length:.3f} m)",
+    ]
+    return "Targets: " + "; ".join(checks) + "."
+
+
+def _peak_memory(fn: Callable[[], object]) -> float:
+    """Peak traced allocation of ``fn()`` in MiB (a separate run: tracing slows it down)."""
+    gc.collect()
+    tracemalloc.start()
+    fn()
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    return peak / 2**20
+
+
+def _scaling_section(args: argparse.Namespace, arena: OccupancyGrid) -> str:
+    office_note = f"`{args.office.name}`"
+    if args.office.is_file():
+        office = rasterize_world(load_world(args.office), 0.05).inflate(BURGER_RADIUS)
+    else:
+        office = synthetic_office().inflate(BURGER_RADIUS)
+        office_note = "a synthetic 20 m x 20 m grid of 4 x 4 rooms (office world file not found)"
+    cases = [("arena 4 m", arena, ARENA_START, ARENA_GOAL), ("office 20 m", office, OFFICE_START, OFFICE_GOAL)]
+    rows: list[list[object]] = []
+    for name, grid, start, goal in cases:
+        first, rate, found = [], [], 0
+        for seed in range(10):
+            t0 = time.perf_counter()
+            search = grow_rrt_star(
+                start, goal, grid, RRTStarConfig(iterations=None, time_budget=2.0), np.random.default_rng(seed)
+            )
+            wall = time.perf_counter() - t0
+            found += search.result.success
+            first.append(search.result.first_solution_s or math.inf)
+            rate.append(search.result.iterations / wall)
+        memory = _peak_memory(
+            partial(
+                grow_rrt_star,
+                start,
+                goal,
+                grid,
+                RRTStarConfig(iterations=2000, time_budget=None),
+                np.random.default_rng(0),
+            )
+        )
+        rows.append(
+            [
+                name,
+                f"{grid.width} x {grid.height}",
+                f"{found}/10",
+                _fmt_ms(_median(first)),
+                f"{_median(rate):.0f}",
+                f"{memory:.1f}",
+            ]
+        )
+    size_table = markdown_table(
+        ["map", "cells", "RRT* success in 2 s", "first path median [ms]", "iterations / s", "peak MiB (2000 it.)"],
+        rows,
+    )
+    iter_rows: list[list[object]] = []
+    for count in (500, 1000, 2000, 4000, 8000):
+        config = RRTStarConfig(iterations=count, time_budget=None)
+        t0 = time.perf_counter()
+        search = grow_rrt_star(ARENA_START, ARENA_GOAL, arena, config, np.random.default_rng(1))
+        wall = time.perf_counter() - t0
+        memory = _peak_memory(partial(grow_rrt_star, ARENA_START, ARENA_GOAL, arena, config, np.random.default_rng(1)))
+        iter_rows.append(
+            [
+                count,
+                len(search.tree),
+                f"{wall:.3f}",
+                f"{wall / count * 1e6:.0f}",
+                f"{memory:.1f}",
+                f"{search.result.length_m:.3f}",
+            ]
+        )
+    iter_table = markdown_table(
+        ["iterations", "nodes", "time [s]", "us / iteration", "peak MiB", "length [m]"], iter_rows
+    )
+    return (
+        f"### Scaling with map size\n\nOffice: {office_note}, start (-5, -5, 0), goal (5, 5); 10 seeds, 2 s budget.\n\n"
+        f"{size_table}\n\n### Scaling with iterations (arena, seed 1)\n\n{iter_table}\n"
+    )
+
+
+def run(args: argparse.Namespace) -> str:
+    arena = course_grid().inflate(BURGER_RADIUS)
+    arena_text, _ = _arena_section(args, arena)
+    parts = [
+        f"Course arena, start (-1.5, -1.5, 0), goal (1.5, 1.5), robot radius {BURGER_RADIUS} m, "
+        f"{args.seeds} seeds (0..{args.seeds - 1}); RRT* budget {args.budget:g} s. OMPL plans in R^2 with straight "
+        "edges (no heading constraint: a relaxed problem) with the same cell-validity test, called back from C++ "
+        "per state. Time-to-target is the first improvement at or below the target within the budget "
+        "(OMPL: cost threshold, 5 s cap); '-' = not reached by the median run.",
+        arena_text,
+    ]
+    if not args.no_scaling:
+        parts.append(_scaling_section(args, arena))
+    return "\n\n".join(parts)

@@ -1,0 +1,115 @@
+"""The RRT and RRT* planners of ``mrs-nav plan``: their options, map loading and optional PNG.
+
+``mrs-nav plan`` looks planners up by name; :data:`TREE_PLANNERS` holds these two, each a function of the
+parsed arguments, the start pose and the goal returning a :class:`~mrs_nav.planning.PlanResult`.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from mrs_nav.errors import InvalidInputError
+from mrs_nav.geometry import Pose2D
+from mrs_nav.map_io import load_map
+from mrs_nav.occupancy_grid import BURGER_RADIUS, OccupancyGrid
+from mrs_nav.planning import PlanResult
+from mrs_nav.rasterize import DEFAULT_RESOLUTION, rasterize_world
+from mrs_nav.rrt import RRTConfig, grow_rrt
+from mrs_nav.rrt_star import RRTStarConfig, grow_rrt_star
+from mrs_nav.rrt_tree import Search
+from mrs_nav.world import load_world
+
+#: RRT* runs for this long when neither --time-budget nor --iterations is given (seconds).
+DEFAULT_STAR_BUDGET = 0.5
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options only the tree planners read (``--map`` belongs to the map/world source group of ``plan``)."""
+    group = parser.add_argument_group("rrt / rrt_star")
+    group.add_argument(
+        "--time-budget",
+        type=float,
+        default=None,
+        metavar="S",
+        help=f"planning time in seconds (rrt_star default {DEFAULT_STAR_BUDGET} s; rrt: none)",
+    )
+    group.add_argument(
+        "--iterations", type=int, default=None, metavar="N", help="samples to draw (rrt default 2000; rrt_star: none)"
+    )
+    group.add_argument(
+        "--robot-radius",
+        type=float,
+        default=BURGER_RADIUS,
+        metavar="R",
+        help=f"obstacles are inflated by this radius in metres (default {BURGER_RADIUS})",
+    )
+    group.add_argument(
+        "--resolution",
+        type=float,
+        default=DEFAULT_RESOLUTION,
+        metavar="M",
+        help=f"cell size when rasterising --world, metres (default {DEFAULT_RESOLUTION})",
+    )
+    group.add_argument(
+        "--min-turning-radius", type=float, default=0.0, metavar="R", help="reject tighter arcs (metres; default 0)"
+    )
+    group.add_argument("--png", type=Path, default=None, metavar="FILE", help="draw the map, tree and path")
+
+
+def load_grid(args: argparse.Namespace) -> OccupancyGrid:
+    """The map of ``--map``, or ``--world`` rasterised at ``--resolution``."""
+    if getattr(args, "map", None) is not None:
+        return load_map(args.map)
+    if getattr(args, "world", None) is not None:
+        return rasterize_world(load_world(args.world), args.resolution)
+    raise InvalidInputError("the tree planners need a map: give --map or --world")
+
+
+def _inflated(args: argparse.Namespace) -> tuple[OccupancyGrid, OccupancyGrid]:
+    if not (np.isfinite(args.robot_radius) and args.robot_radius >= 0.0):
+        raise InvalidInputError(f"--robot-radius must be finite and >= 0, got {args.robot_radius}")
+    grid = load_grid(args)
+    return grid, grid.inflate(args.robot_radius)
+
+
+def _finish(
+    args: argparse.Namespace,
+    search: Search,
+    *,
+    grid: OccupancyGrid,
+    planning: OccupancyGrid,
+    start: Pose2D,
+    goal: tuple[float, float],
+    title: str,
+) -> PlanResult:
+    if args.png is not None:
+        from mrs_nav.tree_drawing import draw_search  # noqa: PLC0415 - matplotlib only when drawing
+
+        draw_search(search, grid, planning, start=start, goal=np.array(goal), title=title, out=args.png)
+    return search.result
+
+
+def plan_with_rrt(args: argparse.Namespace, start: Pose2D, goal: tuple[float, float]) -> PlanResult:
+    grid, planning = _inflated(args)
+    iterations = args.iterations if args.iterations is not None or args.time_budget is not None else 2000
+    config = RRTConfig(iterations=iterations, time_budget=args.time_budget, min_turning_radius=args.min_turning_radius)
+    search = grow_rrt(start, np.array(goal), planning, config, np.random.default_rng(args.seed))
+    return _finish(args, search, grid=grid, planning=planning, start=start, goal=goal, title=f"RRT (seed {args.seed})")
+
+
+def plan_with_rrt_star(args: argparse.Namespace, start: Pose2D, goal: tuple[float, float]) -> PlanResult:
+    grid, planning = _inflated(args)
+    budget = args.time_budget if args.time_budget is not None or args.iterations is not None else DEFAULT_STAR_BUDGET
+    config = RRTStarConfig(iterations=args.iterations, time_budget=budget, min_turning_radius=args.min_turning_radius)
+    search = grow_rrt_star(start, np.array(goal), planning, config, np.random.default_rng(args.seed))
+    return _finish(args, search, grid=grid, planning=planning, start=start, goal=goal, title=f"RRT* (seed {args.seed})")
+
+
+TREE_PLANNERS: dict[str, Callable[[argparse.Namespace, Pose2D, tuple[float, float]], PlanResult]] = {
+    "rrt": plan_with_rrt,
+    "rrt_star": plan_with_rrt_star,
+}
