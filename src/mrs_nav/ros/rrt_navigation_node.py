@@ -4,8 +4,8 @@ linearisation (the course's ``rrt_navigation.py``), around :class:`mrs_nav.navig
 Subscribes ``map`` (nav_msgs/OccupancyGrid) and ``move_base_simple/goal`` (geometry_msgs/PoseStamped, any frame
 tf can bring into the map frame); reads the robot pose from tf ``map -> base_footprint``; publishes ``path``
 (nav_msgs/Path, frame map, latched), ``cmd_vel`` (geometry_msgs/Twist) and ``~status`` (std_msgs/String,
-latched: ``"<state>: <message>"`` with state one of idle, active, preempted, reached, failed, refused). Every
-event is also logged (warnings for refusals and failures).
+latched, one message per event: ``"<state>: <message>"`` with state one of idle, active, preempted, reached,
+failed, refused). Every event is also logged (warnings for refusals and failures).
 """
 
 from __future__ import annotations
@@ -29,13 +29,18 @@ from mrs_nav.path_following import FollowerConfig
 from mrs_nav.ros.conversions import pose_from_msg, pose_from_transform
 from mrs_nav.ros.navigation_conversions import grid_from_msg, path_msg
 
-STATE_NAMES = {
-    GoalState.IDLE: "idle",
-    GoalState.ACTIVE: "active",
-    GoalState.PREEMPTED: "preempted",
-    GoalState.REACHED: "reached",
-    GoalState.FAILED: "failed",
-    GoalState.REFUSED: "refused",
+# The status word published with each event (the navigator's goal state after it).
+STATUS_OF_EVENT = {
+    EventKind.ACCEPTED: "active",
+    EventKind.PLANNED: "active",
+    EventKind.PLAN_FAILED: "active",
+    EventKind.HOLDING: "active",
+    EventKind.RESUMED: "active",
+    EventKind.PREEMPTED: "preempted",
+    EventKind.CANCELLED: "preempted",
+    EventKind.REFUSED: "refused",
+    EventKind.REACHED: "reached",
+    EventKind.FAILED: "failed",
 }
 
 
@@ -144,11 +149,11 @@ class RrtNavigationNode:
         try:
             goal = self._goal_in_map(msg)
         except (MrsNavError, tf2_ros.TransformException) as err:
-            self._report([NavEvent(EventKind.REFUSED, f"goal refused: {err}")], refused=True)
+            self._report([NavEvent(EventKind.REFUSED, f"goal refused: {err}")])
             return
         with self._lock:
             events = self.navigator.set_goal(goal.x, goal.y, rospy.get_time())
-        self._report(events, refused=any(e.kind is EventKind.REFUSED for e in events))
+        self._report(events)
 
     def _goal_in_map(self, msg: PoseStamped) -> Pose2D:
         goal = pose_from_msg(msg.pose)
@@ -196,12 +201,11 @@ class RrtNavigationNode:
             self._path_pub.publish(path_msg(command.path, now, self.config.map_frame))
         self._report(command.events)
 
-    def _report(self, events: list[NavEvent] | tuple[NavEvent, ...], refused: bool = False) -> None:
+    def _report(self, events: list[NavEvent] | tuple[NavEvent, ...]) -> None:
+        """Log each event and publish it on ``~status``."""
         for e in events:
             (rospy.logwarn if e.kind.warning else rospy.loginfo)(f"rrt_navigation: {e.message}")
-        if events:
-            state = "refused" if refused else STATE_NAMES[self.navigator.state]
-            self._status_pub.publish(String(data=f"{state}: {events[-1].message}"))
+            self._status_pub.publish(String(data=f"{STATUS_OF_EVENT[e.kind]}: {e.message}"))
 
     def _stop(self) -> None:
         if self._timer is not None:
