@@ -132,7 +132,7 @@ class NavigatorConfig:
     retry_delay_s: float = 1.0
     progress_m: float = 0.1
     progress_timeout_s: float = 30.0
-    map_timeout_s: float = 30.0
+    map_timeout_s: float = 0.0  # 0 = off: a static map (published once, latched) never refreshes
     follower: FollowerConfig = field(default_factory=FollowerConfig)
 
     def __post_init__(self) -> None:

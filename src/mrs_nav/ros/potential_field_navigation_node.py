@@ -31,11 +31,11 @@ from mrs_nav.obstacles import Obstacles
 from mrs_nav.potential_field_follower import FieldFollower, FieldFollowerConfig, scan_obstacles
 from mrs_nav.ros.conversions import (
     laser_scan_arrays,
-    pose_from_msg,
     pose_from_odometry,
     pose_from_transform,
     valid_ranges,
 )
+from mrs_nav.ros.navigation_conversions import latest_pose, pose_in_frame
 from mrs_nav.world import load_world
 
 OBSTACLE_SOURCES = ("world", "scan")
@@ -154,12 +154,8 @@ class PotentialFieldNavigationNode:
             self._truth = (msg.header.stamp, pose)
 
     def _on_goal(self, msg: PoseStamped) -> None:
-        frame = msg.header.frame_id.lstrip("/")
         try:
-            goal = pose_from_msg(msg.pose)
-            if frame and frame != self.config.frame and self.config.pose_source == "tf":
-                t = self._tf_buffer.lookup_transform(self.config.frame, frame, rospy.Time(0), rospy.Duration(0.5))
-                goal = pose_from_transform(t).compose(goal)
+            goal = pose_in_frame(self._tf_buffer, msg, self.config.frame)
         except (MrsNavError, tf2_ros.TransformException) as err:
             rospy.logwarn(f"potential_field_navigation: goal refused: {err}")
             self._status("refused", f"goal refused: {err}")
@@ -203,14 +199,8 @@ class PotentialFieldNavigationNode:
             if truth is None or (now - truth[0]).to_sec() > self.config.pose_timeout_s:
                 return None
             return truth[1]
-        try:
-            t = self._tf_buffer.lookup_transform(self.config.frame, self.config.base_frame, rospy.Time(0))
-        except tf2_ros.TransformException as err:
-            rospy.logwarn_throttle(5.0, f"potential_field_navigation: no robot pose: {err}")
-            return None
-        if (now - t.header.stamp).to_sec() > self.config.pose_timeout_s:
-            return None
-        return pose_from_transform(t)
+        cfg = self.config
+        return latest_pose(self._tf_buffer, cfg.frame, cfg.base_frame, cfg.pose_timeout_s, "potential_field_navigation")
 
     # -- control ------------------------------------------------------------------------------------------------
 

@@ -26,8 +26,7 @@ from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.navigator import PLANNERS, EventKind, GoalState, NavEvent, Navigator, NavigatorConfig, rrt_planner
 from mrs_nav.path_following import FollowerConfig
-from mrs_nav.ros.conversions import pose_from_msg, pose_from_transform
-from mrs_nav.ros.navigation_conversions import grid_from_msg, path_msg
+from mrs_nav.ros.navigation_conversions import grid_from_msg, latest_pose, path_msg, pose_in_frame
 
 # The status word published with each event (the navigator's goal state after it).
 STATUS_OF_EVENT = {
@@ -88,7 +87,7 @@ class RrtNavigationConfig:
             max_failed_plans=int(get("max_failed_plans", 5)),
             retry_delay_s=float(get("retry_delay", 1.0)),
             progress_timeout_s=float(get("progress_timeout", 30.0)),
-            map_timeout_s=float(get("map_timeout", 30.0)),
+            map_timeout_s=float(get("map_timeout", 0.0)),
             follower=follower,
         )
         seed = get("seed", -1)
@@ -147,7 +146,7 @@ class RrtNavigationNode:
 
     def _on_goal(self, msg: PoseStamped) -> None:
         try:
-            goal = self._goal_in_map(msg)
+            goal = pose_in_frame(self._tf_buffer, msg, self.config.map_frame)
         except (MrsNavError, tf2_ros.TransformException) as err:
             self._report([NavEvent(EventKind.REFUSED, f"goal refused: {err}")])
             return
@@ -155,26 +154,10 @@ class RrtNavigationNode:
             events = self.navigator.set_goal(goal.x, goal.y, rospy.get_time())
         self._report(events)
 
-    def _goal_in_map(self, msg: PoseStamped) -> Pose2D:
-        goal = pose_from_msg(msg.pose)
-        frame = msg.header.frame_id.lstrip("/")
-        if frame in ("", self.config.map_frame):
-            return goal
-        t = self._tf_buffer.lookup_transform(self.config.map_frame, frame, rospy.Time(0), rospy.Duration(0.5))
-        return pose_from_transform(t).compose(goal)
-
     def _pose(self) -> Pose2D | None:
         """The robot pose in the map frame from tf, or None when unavailable or older than ``pose_timeout``."""
-        try:
-            t = self._tf_buffer.lookup_transform(self.config.map_frame, self.config.base_frame, rospy.Time(0))
-        except tf2_ros.TransformException as err:
-            rospy.logwarn_throttle(5.0, f"rrt_navigation: no robot pose: {err}")
-            return None
-        age = (rospy.Time.now() - t.header.stamp).to_sec()
-        if age > self.config.pose_timeout_s:
-            rospy.logwarn_throttle(5.0, f"rrt_navigation: robot pose is {age:.1f} s old")
-            return None
-        return pose_from_transform(t)
+        cfg = self.config
+        return latest_pose(self._tf_buffer, cfg.map_frame, cfg.base_frame, cfg.pose_timeout_s, "rrt_navigation")
 
     # -- control ----------------------------------------------------------------------------------------------
 
