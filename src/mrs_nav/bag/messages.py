@@ -7,7 +7,6 @@ from typing import Any
 import numpy as np
 
 from mrs_nav.bag.io import typestore
-from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D, quaternion_from_yaw, yaw_from_quaternion
 from mrs_nav.slam.scan import LaserScanData
 
@@ -58,17 +57,14 @@ def laser_scan_message(scan: LaserScanData, seconds: float, frame: str, seq: int
 
 def scan_from_message(message: Any) -> LaserScanData:
     """The core scan of a ``sensor_msgs/LaserScan``; raises InvalidInputError when its geometry is inconsistent."""
-    ranges = np.asarray(message.ranges, dtype=np.float64)
-    inc = float(message.angle_increment)
-    if inc == 0.0:
-        raise InvalidInputError("laser scan has angle_increment 0")
-    expected = round((float(message.angle_max) - float(message.angle_min)) / inc) + 1
-    if ranges.size != expected:
-        raise InvalidInputError(
-            f"laser scan has {ranges.size} ranges but its angles "
-            f"{message.angle_min:.4f}..{message.angle_max:.4f} step {inc:.5f} need {expected}"
-        )
-    return LaserScanData(float(message.angle_min), inc, float(message.range_min), float(message.range_max), ranges)
+    return LaserScanData.from_message_fields(
+        angle_min=float(message.angle_min),
+        angle_max=float(message.angle_max),
+        angle_increment=float(message.angle_increment),
+        range_min=float(message.range_min),
+        range_max=float(message.range_max),
+        ranges=np.asarray(message.ranges, dtype=np.float64),
+    )
 
 
 def odometry_message(pose: Pose2D, seconds: float, frame: str, child: str, seq: int = 0) -> Any:

@@ -5,6 +5,7 @@ Units: metres, radians, seconds. A value that makes no sense raises :class:`Inva
 
 from __future__ import annotations
 
+import builtins
 import dataclasses
 import math
 from dataclasses import dataclass
@@ -34,6 +35,9 @@ class SlamConfig:
         lfree, loccupied, lmax: log-odds added per free / occupied observation and its clamp.
         search_linear, search_angular: half-widths of the scan matcher's correlative search window around
             the odometry prediction (m, rad).
+        srr, srt, str, stt: odometry error model of the matcher's prior (gmapping's names): the prediction's
+            position spread is ``srr * travelled + srt * turned`` (m) and its heading spread
+            ``str * travelled + stt * turned`` (rad), plus a floor of 2 cm and 1 degree.
         sigma: standard deviation of the likelihood field (m) used to score a scan against the map.
     """
 
@@ -54,6 +58,10 @@ class SlamConfig:
     lmax: float = 8.0
     search_linear: float = 0.3
     search_angular: float = 0.5
+    srr: float = 0.1
+    srt: float = 0.2
+    str: float = 0.1  # gmapping's name; annotations in this class say builtins.str for the type
+    stt: float = 0.2
     sigma: float = 0.05
 
     def __post_init__(self) -> None:
@@ -65,7 +73,8 @@ class SlamConfig:
         for name in positive:
             if getattr(self, name) <= 0.0:
                 raise InvalidInputError(f"SLAM parameter {name} must be > 0, got {getattr(self, name)}")
-        non_negative = ("maxRange", "linearUpdate", "angularUpdate", "search_linear", "search_angular")
+        non_negative: tuple[builtins.str, ...] = ("maxRange", "linearUpdate", "angularUpdate", "search_linear")
+        non_negative += ("search_angular", "srr", "srt", "str", "stt")
         for name in non_negative:
             if getattr(self, name) < 0.0:
                 raise InvalidInputError(f"SLAM parameter {name} must be >= 0, got {getattr(self, name)}")
@@ -75,10 +84,10 @@ class SlamConfig:
             raise InvalidInputError(f"SLAM map extent is empty: x {self.xmin}..{self.xmax}, y {self.ymin}..{self.ymax}")
 
     @classmethod
-    def from_mapping(cls, values: dict[str, Any]) -> SlamConfig:
+    def from_mapping(cls, values: dict[builtins.str, Any]) -> SlamConfig:
         """Build a config from ``{name: value}`` (e.g. ROS params), rejecting unknown names and bad types."""
         known = {f.name: f for f in dataclasses.fields(cls)}
-        kwargs: dict[str, Any] = {}
+        kwargs: dict[builtins.str, Any] = {}
         for name, value in values.items():
             if name not in known:
                 raise InvalidInputError(f"unknown SLAM parameter {name!r}; known: {', '.join(sorted(known))}")

@@ -5,12 +5,15 @@ the scan can reach, and into a likelihood field ``L = exp(-D^2 / (2 sigma^2))``.
 
 1. Coarse search (Olson, "Real-time correlative scan matching", ICRA 2009): for every candidate heading in the
    angular window, every translation on a grid of ``COARSE`` cells is scored with ``L`` max-pooled over
-   ``COARSE`` x ``COARSE`` cells, an upper bound of the fine score anywhere in that block. A weak quadratic
-   penalty on the distance from the odometry prediction breaks ties along corridors.
+   ``COARSE`` x ``COARSE`` cells, an upper bound of the fine score anywhere in that block, minus the odometry
+   prior ``PRIOR_WEIGHT * 0.5 * (dx^2 + dy^2) / s_xy^2 + dtheta^2 / s_theta^2)`` with the spreads expected of
+   the odometry over the motion since the last scan. Without it a scan in a featureless corridor slides along.
 2. Fine search: the best coarse blocks are searched cell by cell with a finer angular step.
-3. Refinement: point-to-point ICP (Gauss-Newton, Huber-weighted) where each scan point is paired with the mean
-   end point of its nearest occupied cell (found through the distance transform's nearest-cell indices), for
-   sub-cell, sub-degree accuracy; pairs farther than 4 cells apart are ignored.
+3. Refinement: point-to-line ICP (Gauss-Newton, Huber-weighted) where each scan point is paired with the mean
+   end point of its nearest occupied cell (found through the distance transform's nearest-cell indices) and the
+   surface normal there (principal axes of the neighbouring mean hits), for sub-cell, sub-degree accuracy
+   without sticking to the cell grid along walls; pairs farther than 4 cells apart are ignored. The same
+   odometry prior keeps directions the scan does not constrain (along a corridor) where odometry put them.
 """
 
 from __future__ import annotations
@@ -29,7 +32,10 @@ COARSE = 4  # cells per coarse translation step
 COARSE_ANGLE = math.radians(1.0)
 FINE_ANGLE = math.radians(0.25)
 TOP_CANDIDATES = 8
-PRIOR_WEIGHT = 0.02  # score units per (window half-width)^2 of deviation from the odometry prediction
+PRIOR_WEIGHT = 0.05  # score units (mean likelihood, 0..1) per squared prior standard deviation, halved
+NORMAL_RADIUS = 2  # cells: the neighbourhood whose hits define a surface normal
+POINT_SIGMA_CELLS = 0.5  # assumed standard deviation of a point-to-hit residual, in cells
+INDEPENDENT_POINTS = 20.0  # neighbouring scan points are correlated; count at most this many as independent
 
 
 @dataclass(frozen=True)
@@ -72,13 +78,33 @@ class DistanceField:
         self.near_iy = np.pad(near[0] + y0, pad, constant_values=-1)
         self.near_ix = np.pad(near[1] + x0, pad, constant_values=-1)
 
-    def nearest_hits(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Mean hit point (m) of the occupied cell nearest to each point; NaN outside the window."""
+    def nearest_surface(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """For each point: the mean hit point ``(mx, my)`` (m) of the nearest occupied cell and the angle (rad)
+        of the surface normal there, from the principal axes of the mean hits of the occupied cells within
+        ``NORMAL_RADIUS`` cells. NaN outside the window or where fewer than 3 hits define no line."""
         ix, iy = self.cells(x, y)
         niy, nix = self.near_iy[iy, ix], self.near_ix[iy, ix]
         inside = niy >= 0
-        hx, hy = self.grid.mean_hits(np.maximum(niy, 0), np.maximum(nix, 0))
-        return np.where(inside, hx, np.nan), np.where(inside, hy, np.nan)
+        niy, nix = np.maximum(niy, 0), np.maximum(nix, 0)
+        hx, hy = self.grid.mean_hits(niy, nix)
+        offsets = np.arange(-NORMAL_RADIUS, NORMAL_RADIUS + 1)
+        oy, ox = (a.ravel() for a in np.meshgrid(offsets, offsets, indexing="ij"))
+        gy = np.clip(niy[:, None] + oy[None, :], 0, self.grid.height - 1)
+        gx = np.clip(nix[:, None] + ox[None, :], 0, self.grid.width - 1)
+        occupied = (self.grid.logodds[gy, gx] > 0.0) & (self.grid.hit_count[gy, gx] > 0)
+        px, py = self.grid.mean_hits(gy, gx)
+        w = occupied.astype(np.float64)
+        count = w.sum(axis=1)
+        safe = np.maximum(count, 1.0)
+        cx = (w * px).sum(axis=1) / safe
+        cy = (w * py).sum(axis=1) / safe
+        dx, dy = px - cx[:, None], py - cy[:, None]
+        sxx, syy, sxy = (w * dx * dx).sum(axis=1), (w * dy * dy).sum(axis=1), (w * dx * dy).sum(axis=1)
+        # Principal (tangent) direction of the local hits; the normal is perpendicular to it.
+        normal = 0.5 * np.arctan2(2.0 * sxy, sxx - syy) + 0.5 * np.pi
+        good = inside & (count >= 3)
+        nan = np.full(x.shape, np.nan)
+        return np.where(good, hx, nan), np.where(good, hy, nan), np.where(good, normal, nan)
 
     def cells(self, x: FloatArray, y: FloatArray) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
         """Cell indices of points, clipped into the padded window."""
@@ -121,8 +147,13 @@ class ScanMatcher:
         self.search_linear = search_linear
         self.search_angular = search_angular
 
-    def match(self, field: DistanceField, points: FloatArray, prior: Pose2D) -> MatchResult:
-        """Best laser pose for ``points`` (N x 2, laser frame) near ``prior``; ``prior`` if nothing to match."""
+    def match(
+        self, field: DistanceField, points: FloatArray, prior: Pose2D, spread: tuple[float, float] = (1.0, 1.0)
+    ) -> MatchResult:
+        """Best laser pose for ``points`` (N x 2, laser frame) near ``prior``; ``prior`` if nothing to match.
+
+        ``spread``: standard deviations (m, rad) of the odometry prediction ``prior``.
+        """
         if field.empty or points.shape[0] < 3:
             return MatchResult(prior, 0.0, 0.0)
         likelihood = np.exp(-(field.distance**2) / (2.0 * self.sigma**2))
@@ -136,7 +167,7 @@ class ScanMatcher:
         n_ang = max(1, math.ceil(self.search_angular / COARSE_ANGLE))
         coarse_offsets = np.arange(-n_lin, n_lin + 1) * COARSE
         coarse_angles = np.arange(-n_ang, n_ang + 1) * COARSE_ANGLE
-        scores = self._scores(field, pooled, points, prior, angles=coarse_angles, offsets=coarse_offsets)
+        scores = self._scores(field, pooled, points, prior, angles=coarse_angles, offsets=coarse_offsets, spread=spread)
         best: tuple[float, float, int, int] = (-math.inf, 0.0, 0, 0)
         for flat in np.argsort(scores, axis=None)[::-1][:TOP_CANDIDATES]:
             a, ox, oy = np.unravel_index(flat, scores.shape)
@@ -151,6 +182,7 @@ class ScanMatcher:
                 angles=fine_angles,
                 offsets=fine_offsets,
                 base=(int(coarse_offsets[ox]), int(coarse_offsets[oy])),
+                spread=spread,
             )
             fa, fx, fy = np.unravel_index(int(np.argmax(fine)), fine.shape)
             if fine[fa, fx, fy] > best[0]:
@@ -162,7 +194,7 @@ class ScanMatcher:
                 )
         _, dyaw, dx, dy = best
         start = Pose2D(prior.x + dx * res, prior.y + dy * res, wrap_angle(prior.yaw + dyaw))
-        pose = self.refine(field, points, start)
+        pose = self.refine(field, points, start, prior=prior, spread=spread)
         return self._evaluate(field, likelihood, points, pose)
 
     def _scores(
@@ -175,6 +207,7 @@ class ScanMatcher:
         angles: FloatArray,
         offsets: npt.NDArray[np.int64],
         base: tuple[int, int] = (0, 0),
+        spread: tuple[float, float] = (1.0, 1.0),
     ) -> FloatArray:
         """Mean table value minus the prior penalty, for every (angle, x offset, y offset) in cells."""
         res = field.resolution
@@ -189,14 +222,28 @@ class ScanMatcher:
         cy = np.clip(iy[:, None, :] + offsets[None, :, None], 0, h - 1)
         flat = cy[:, None, :, :] * w + cx[:, :, None, :]  # (A, Kx, Ky, N)
         score = table.ravel()[flat].mean(axis=3)
-        ox = (base[0] + offsets) * res / max(self.search_linear, res)
-        oy = (base[1] + offsets) * res / max(self.search_linear, res)
-        oa = angles / max(self.search_angular, FINE_ANGLE)
-        penalty = PRIOR_WEIGHT * (oa[:, None, None] ** 2 + ox[None, :, None] ** 2 + oy[None, None, :] ** 2)
+        ox = (base[0] + offsets) * res / spread[0]
+        oy = (base[1] + offsets) * res / spread[0]
+        oa = angles / spread[1]
+        penalty = 0.5 * PRIOR_WEIGHT * (oa[:, None, None] ** 2 + ox[None, :, None] ** 2 + oy[None, None, :] ** 2)
         return np.asarray(score - penalty, dtype=np.float64)
 
-    def refine(self, field: DistanceField, points: FloatArray, start: Pose2D, iterations: int = 10) -> Pose2D:
-        """Point-to-point ICP from ``start`` against the mean hit points of the nearest occupied cells."""
+    def refine(
+        self,
+        field: DistanceField,
+        points: FloatArray,
+        start: Pose2D,
+        *,
+        prior: Pose2D,
+        spread: tuple[float, float],
+        iterations: int = 10,
+    ) -> Pose2D:
+        """Point-to-line ICP from ``start`` against the surfaces at the nearest occupied cells.
+
+        A maximum a posteriori Gauss-Newton: point residuals with standard deviation ``POINT_SIGMA_CELLS``
+        (at most ``INDEPENDENT_POINTS`` counted as independent) plus the odometry prior ``prior`` / ``spread``.
+        """
+        prior_info = np.array([spread[0] ** -2, spread[0] ** -2, spread[1] ** -2])
         res = field.resolution
         x, y, yaw = start.x, start.y, start.yaw
         cutoff = 4.0 * res
@@ -205,27 +252,21 @@ class ScanMatcher:
             c, s = math.cos(yaw), math.sin(yaw)
             wx = x + c * points[:, 0] - s * points[:, 1]
             wy = y + s * points[:, 0] + c * points[:, 1]
-            mx, my = field.nearest_hits(wx, wy)
-            rx, ry = wx - mx, wy - my
-            dist = np.hypot(rx, ry)
-            use = np.isfinite(dist) & (dist < cutoff)
+            mx, my, normal = field.nearest_surface(wx, wy)
+            use = np.isfinite(normal) & (np.hypot(wx - mx, wy - my) < cutoff)
             if int(use.sum()) < 3:
                 break
-            rx, ry, dist = rx[use], ry[use], dist[use]
+            nx, ny = np.cos(normal[use]), np.sin(normal[use])
+            # residual r = n . (R p + t - m); dr/dtheta = n . (-s px - c py, c px - s py)
+            r = nx * (wx[use] - mx[use]) + ny * (wy[use] - my[use])
             px, py = points[use, 0], points[use, 1]
-            weight = np.where(dist <= huber, 1.0, huber / np.maximum(dist, 1e-12))
-            # residual r = R p + t - m; dr/dtheta = (-s px - c py, c px - s py)
-            dtx, dty = -s * px - c * py, c * px - s * py
-            n = rx.size
-            jac = np.zeros((2 * n, 3))
-            jac[:n, 0] = 1.0
-            jac[n:, 1] = 1.0
-            jac[:n, 2] = dtx
-            jac[n:, 2] = dty
-            r = np.concatenate([rx, ry])
-            w = np.concatenate([weight, weight])
-            hess = (jac * w[:, None]).T @ jac + np.diag([1e-9, 1e-9, 1e-9])
-            step = -np.linalg.solve(hess, (jac * w[:, None]).T @ r)
+            jac = np.stack([nx, ny, nx * (-s * px - c * py) + ny * (c * px - s * py)], axis=1)
+            n = r.size
+            weight = np.where(np.abs(r) <= huber, 1.0, huber / np.maximum(np.abs(r), 1e-12))
+            w = weight / ((POINT_SIGMA_CELLS * res) ** 2 * max(1.0, n / INDEPENDENT_POINTS))
+            deviation = np.array([x - prior.x, y - prior.y, wrap_angle(yaw - prior.yaw)])
+            hess = (jac * w[:, None]).T @ jac + np.diag(prior_info)
+            step = -np.linalg.solve(hess, (jac * w[:, None]).T @ r + prior_info * deviation)
             x, y, yaw = x + step[0], y + step[1], yaw + step[2]
             if abs(step[0]) + abs(step[1]) < 1e-5 and abs(step[2]) < 1e-5:
                 break

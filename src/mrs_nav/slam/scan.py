@@ -36,6 +36,28 @@ class LaserScanData:
         if self.ranges.ndim != 1:
             raise InvalidInputError(f"laser scan ranges must be one-dimensional, got shape {self.ranges.shape}")
 
+    @classmethod
+    def from_message_fields(
+        cls,
+        *,
+        angle_min: float,
+        angle_max: float,
+        angle_increment: float,
+        range_min: float,
+        range_max: float,
+        ranges: FloatArray,
+    ) -> LaserScanData:
+        """A scan from the fields of a ``sensor_msgs/LaserScan``, rejecting ranges that do not fit its angles."""
+        if angle_increment == 0.0 or not math.isfinite(angle_increment):
+            raise InvalidInputError(f"laser scan has angle_increment {angle_increment}")
+        expected = round((angle_max - angle_min) / angle_increment) + 1
+        if ranges.size != expected:
+            raise InvalidInputError(
+                f"laser scan has {ranges.size} ranges but its angles {angle_min:.4f}..{angle_max:.4f} "
+                f"step {angle_increment:.5f} need {expected}"
+            )
+        return cls(angle_min, angle_increment, range_min, range_max, np.asarray(ranges, dtype=np.float64))
+
     @property
     def angles(self) -> FloatArray:
         return np.asarray(self.angle_min + self.angle_increment * np.arange(self.ranges.size), dtype=np.float64)

@@ -23,6 +23,8 @@ from mrs_nav.slam.scan import BeamSplit, LaserScanData, split_beams
 
 MIN_POINTS = 10  # fewer end points than this: trust odometry, the match would be noise
 FIELD_MAX_DISTANCE = 0.5  # m, truncation of the distance field
+MIN_SPREAD_M = 0.02  # m, floor of the odometry prediction's position spread
+MIN_SPREAD_RAD = math.radians(1.0)  # floor of its heading spread
 
 
 @dataclass(frozen=True)
@@ -85,7 +87,7 @@ class Slam:
         points = _points(beams)
         if self.processed and points.shape[0] >= MIN_POINTS:
             sensor_prior = predicted.compose(self.laser_pose)
-            match = self._match(points, sensor_prior)
+            match = self._match(points, sensor_prior, self._spread(odom))
             pose = match.pose.compose(self.laser_pose.inverse())
         else:
             pose = predicted
@@ -95,7 +97,17 @@ class Slam:
         self.processed.append(record)
         return record
 
-    def _match(self, points: FloatArray, sensor_prior: Pose2D) -> MatchResult:
+    def _spread(self, odom: Pose2D) -> tuple[float, float]:
+        """Standard deviations (m, rad) of the odometry prediction since the last processed scan."""
+        c = self.config
+        moved = odom.relative_to(self.processed[-1].odom)
+        travelled, turned = math.hypot(moved.x, moved.y), abs(moved.yaw)
+        return (
+            MIN_SPREAD_M + c.srr * travelled + c.srt * turned,
+            MIN_SPREAD_RAD + c.str * travelled + c.stt * turned,
+        )
+
+    def _match(self, points: FloatArray, sensor_prior: Pose2D, spread: tuple[float, float]) -> MatchResult:
         thinned = thin_points(points, self.config.delta)
         c, s = math.cos(sensor_prior.yaw), math.sin(sensor_prior.yaw)
         wx = sensor_prior.x + c * thinned[:, 0] - s * thinned[:, 1]
@@ -112,7 +124,7 @@ class Slam:
         )
         pad = math.ceil(reach / self.config.delta) + 2
         field = DistanceField(self.grid, bounds, FIELD_MAX_DISTANCE, pad)
-        return self.matcher.match(field, thinned, sensor_prior)
+        return self.matcher.match(field, thinned, sensor_prior, spread)
 
 
 def _points(beams: BeamSplit) -> FloatArray:

@@ -1,0 +1,180 @@
+"""SlamNode: SLAM-lite (:class:`mrs_nav.slam.Slam`) as a ROS 1 node in place of slam_gmapping.
+
+Subscribes ``scan`` (sensor_msgs/LaserScan). For every scan it looks up the odometry pose
+(``odom_frame -> base_frame``) at the scan's stamp through tf, waiting up to ``~tf_wait`` s for the odometry to
+catch up instead of dropping the scan on extrapolation, and feeds the pair to the core, which processes it when
+the update gates open. Publishes ``map`` (nav_msgs/OccupancyGrid, latched) and ``map_metadata`` (latched) every
+``~map_update_interval`` s of map change, and tf ``map_frame -> odom_frame`` every ``~transform_publish_period``
+s (20 Hz by default). Parameters take gmapping's names (see config/slam.yaml and the README).
+
+A scan that cannot be used (wrong length, bad geometry, no transform) is logged (throttled) and skipped; the
+node never dies of one. When sim time jumps backwards (a bag restarted), the map and the tf buffer are reset.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import threading
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import rospy
+import tf2_ros
+from nav_msgs.msg import MapMetaData, OccupancyGrid
+from sensor_msgs.msg import LaserScan
+
+from mrs_nav.errors import MrsNavError
+from mrs_nav.geometry import Pose2D
+from mrs_nav.ros.conversions import pose_from_transform, pose_msg, transform_stamped
+from mrs_nav.slam import LaserScanData, Slam, SlamConfig
+
+# Parameters of SlamConfig the node reads (gmapping's names where gmapping has them).
+_SLAM_PARAMS = tuple(f.name for f in dataclasses.fields(SlamConfig))
+_TIME_JUMP = 1.0  # s: a scan this much older than the last one means sim time went back
+
+
+@dataclass(frozen=True)
+class SlamNodeConfig:
+    """The node's private parameters: frames, timing, and the core :class:`SlamConfig`."""
+
+    slam: SlamConfig
+    base_frame: str = "base_footprint"
+    odom_frame: str = "odom"
+    map_frame: str = "map"
+    transform_publish_period: float = 0.05
+    tf_wait: float = 0.2
+
+    @classmethod
+    def from_params(cls) -> SlamNodeConfig:
+        """Read the ``~`` parameters once (defaults in config/slam.yaml); bad values raise InvalidInputError."""
+        values = {name: rospy.get_param(f"~{name}") for name in _SLAM_PARAMS if rospy.has_param(f"~{name}")}
+        return cls(
+            slam=SlamConfig.from_mapping(values),
+            base_frame=str(rospy.get_param("~base_frame", "base_footprint")),
+            odom_frame=str(rospy.get_param("~odom_frame", "odom")),
+            map_frame=str(rospy.get_param("~map_frame", "map")),
+            transform_publish_period=float(rospy.get_param("~transform_publish_period", 0.05)),
+            tf_wait=float(rospy.get_param("~tf_wait", 0.2)),
+        )
+
+
+def scan_data(msg: LaserScan) -> LaserScanData:
+    """The core scan of a LaserScan message (InvalidInputError if its ranges do not fit its angles)."""
+    return LaserScanData.from_message_fields(
+        angle_min=msg.angle_min,
+        angle_max=msg.angle_max,
+        angle_increment=msg.angle_increment,
+        range_min=msg.range_min,
+        range_max=msg.range_max,
+        ranges=np.asarray(msg.ranges, dtype=np.float64),
+    )
+
+
+class SlamNode:
+    """Wires :class:`Slam` to ``scan``, tf, ``map`` and ``map_metadata``; :meth:`spin` runs until shutdown."""
+
+    def __init__(self, config: SlamNodeConfig) -> None:
+        self.config = config
+        self._lock = threading.Lock()
+        self._slam: Slam | None = None  # made at the first scan, once the laser's mounting is known
+        self._laser_frame = ""
+        self._last_stamp = -math.inf
+        self._last_map_time = -math.inf
+        self._last_tf_stamp = -math.inf
+        self._buffer = tf2_ros.Buffer(cache_time=rospy.Duration(30.0))
+        self._listener = tf2_ros.TransformListener(self._buffer)
+        self._broadcaster = tf2_ros.TransformBroadcaster()
+        self._map_pub = rospy.Publisher("map", OccupancyGrid, queue_size=1, latch=True)
+        self._meta_pub = rospy.Publisher("map_metadata", MapMetaData, queue_size=1, latch=True)
+        self._scan_sub = rospy.Subscriber("scan", LaserScan, self._on_scan, queue_size=5)
+        self._timer = rospy.Timer(rospy.Duration(config.transform_publish_period), self._publish_transform)
+
+    # -- scans ----------------------------------------------------------------------------------------------------
+
+    def _on_scan(self, msg: LaserScan) -> None:
+        stamp = msg.header.stamp.to_sec()
+        if stamp < self._last_stamp - _TIME_JUMP:
+            rospy.logwarn(f"slam: time went back {self._last_stamp - stamp:.1f} s; starting a new map")
+            with self._lock:
+                self._slam = None
+            self._buffer.clear()
+            self._last_tf_stamp = -math.inf
+        self._last_stamp = stamp
+        try:
+            scan = scan_data(msg)
+            odom = self._lookup(self.config.odom_frame, self.config.base_frame, msg.header.stamp)
+            slam = self._slam_for(msg.header.frame_id, msg.header.stamp)
+            with self._lock:
+                done = slam.add_scan(odom, scan, stamp)
+        except MrsNavError as err:
+            rospy.logwarn_throttle(5.0, f"slam: skipping scan at {stamp:.3f}: {err}")
+            return
+        except (tf2_ros.LookupException, tf2_ros.ConnectivityException, tf2_ros.ExtrapolationException) as err:
+            rospy.logwarn_throttle(5.0, f"slam: skipping scan at {stamp:.3f}, no transform: {err}")
+            return
+        # The first processed scan publishes a map at once; later ones every map_update_interval.
+        if done is not None and stamp - self._last_map_time >= self.config.slam.map_update_interval:
+            self._publish_map(msg.header.stamp)
+
+    def _lookup(self, parent: str, child: str, stamp: rospy.Time) -> Pose2D:
+        """``child`` in ``parent`` at ``stamp``, waiting up to ``tf_wait`` s for the transform to arrive."""
+        tf = self._buffer.lookup_transform(parent, child, stamp, rospy.Duration(self.config.tf_wait))
+        return pose_from_transform(tf)
+
+    def _slam_for(self, laser_frame: str, stamp: rospy.Time) -> Slam:
+        """The SLAM instance, made at the first usable scan with the laser's mounting read from tf."""
+        with self._lock:
+            if self._slam is not None and laser_frame == self._laser_frame:
+                return self._slam
+        mounting = self._lookup(self.config.base_frame, laser_frame, stamp)
+        with self._lock:
+            self._slam = Slam(self.config.slam, mounting)
+            self._laser_frame = laser_frame
+            self._last_map_time = -math.inf
+            return self._slam
+
+    # -- outputs --------------------------------------------------------------------------------------------------
+
+    def _publish_transform(self, _event: Any) -> None:
+        with self._lock:
+            if self._slam is None:
+                return
+            correction = self._slam.map_to_odom
+        # Dated slightly ahead, as gmapping does, so lookups at the newest odometry stamp find it.
+        stamp = (rospy.Time.now() + rospy.Duration(self.config.transform_publish_period)).to_sec()
+        if stamp <= self._last_tf_stamp:
+            # At maximum sim rate the timer can fire twice in one clock tick; tf rejects a repeated stamp.
+            return
+        self._last_tf_stamp = stamp
+        try:
+            self._broadcaster.sendTransform(
+                transform_stamped(correction, stamp, self.config.map_frame, self.config.odom_frame)
+            )
+        except rospy.ROSException as err:  # shutting down
+            rospy.logdebug(f"slam: map->odom not sent: {err}")
+
+    def _publish_map(self, stamp: rospy.Time) -> None:
+        with self._lock:
+            if self._slam is None:
+                return
+            grid = self._slam.grid
+            data = grid.to_occupancy()
+            info = MapMetaData()
+            info.map_load_time = stamp
+            info.resolution = grid.resolution
+            info.width, info.height = grid.width, grid.height
+            info.origin = pose_msg(Pose2D(grid.origin_x, grid.origin_y, 0.0))
+        msg = OccupancyGrid()
+        msg.header.stamp = stamp
+        msg.header.frame_id = self.config.map_frame
+        msg.info = info
+        msg.data = data.ravel().tolist()
+        self._map_pub.publish(msg)
+        self._meta_pub.publish(info)
+        self._last_map_time = stamp.to_sec()
+
+    def spin(self) -> None:
+        rospy.spin()
+        self._timer.shutdown()
