@@ -17,6 +17,7 @@ trajectory error of the SLAM pose and the map's agreement with the world.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable
@@ -26,19 +27,33 @@ from typing import Protocol
 
 import matplotlib
 import numpy as np
+import yaml
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.navigator import GoalState, NavEvent, Navigator, NavigatorConfig, rrt_planner
 from mrs_nav.occupancy_grid import OccupancyGrid
 from mrs_nav.path_following import cross_track_distance
-from mrs_nav.rasterize import rasterize_world
 from mrs_nav.sim import Scan, Simulator, SimulatorConfig
 from mrs_nav.slam import LaserScanData, Slam, SlamConfig
+from mrs_nav.slam.evaluation import map_iou
 from mrs_nav.world import World
 
+CONFIG_DIR = Path(__file__).resolve().parents[2] / "config"
+
 matplotlib.use("Agg")  # headless: figures are files, never windows
-import matplotlib.pyplot as plt
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def node_slam_config() -> SlamConfig:
+    """The SLAM parameters of the SLAM node (``config/slam.yaml`` of the checkout), so the demo maps as the live
+    system does; the core defaults when the file is not there."""
+    path = CONFIG_DIR / "slam.yaml"
+    if not path.is_file():
+        return SlamConfig(maxUrange=3.0)
+    values = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
+    known = {f.name for f in dataclasses.fields(SlamConfig)}
+    return SlamConfig.from_mapping({k: v for k, v in values.items() if k in known})
 
 
 @dataclass(frozen=True)
@@ -55,7 +70,8 @@ class DemoConfig:
     plan_time_budget_s: float | None = 0.25
     plan_iterations: int | None = None
     navigator: NavigatorConfig = field(default_factory=NavigatorConfig)
-    slam: SlamConfig = field(default_factory=SlamConfig)
+    slam: SlamConfig = field(default_factory=node_slam_config)
+    odom_noise: float = 0.01  # as the simulator node's default (config/simulator.yaml)
 
     @property
     def map_period(self) -> float:
@@ -142,20 +158,6 @@ def slam_grid(slam: Slam) -> OccupancyGrid:
     return OccupancyGrid(g.to_occupancy(), g.resolution, (g.origin_x, g.origin_y, 0.0))
 
 
-def map_iou(grid: OccupancyGrid, world: World) -> float:
-    """Intersection over union of the occupied cells of ``grid`` and of ``world`` rasterised on the same cells,
-    over the cells the map has observed (known)."""
-    truth = rasterize_world(world, grid.resolution, margin=1.0)
-    rows, cols = np.nonzero(grid.values >= 0)
-    if rows.size == 0:
-        return 0.0
-    centres = grid.cell_centres(rows, cols)
-    mapped = grid.occupied_mask[rows, cols]
-    real = truth.is_occupied(centres)
-    union = np.count_nonzero(mapped | real)
-    return float(np.count_nonzero(mapped & real) / union) if union else 1.0
-
-
 class Demo:
     """One run of the whole stack; :meth:`run` drives it through the goals."""
 
@@ -169,7 +171,8 @@ class Demo:
         self.world = world
         self.config = config
         self.recorder = recorder
-        self.sim = Simulator(world, sim_config or SimulatorConfig(seed=config.seed), config.start)
+        sim_config = sim_config or SimulatorConfig(odom_noise=config.odom_noise, seed=config.seed)
+        self.sim = Simulator(world, sim_config, config.start)
         laser = self.sim.config.laser
         self.slam = Slam(config.slam, Pose2D(laser.mount_x, laser.mount_y, 0.0))
         planner = rrt_planner(config.planner, config.plan_time_budget_s, config.plan_iterations)
@@ -204,7 +207,7 @@ class Demo:
             sim_time_s=self.sim.time,
             wall_time_s=time.perf_counter() - wall0,
             ate_rmse_m=float(np.sqrt(np.mean(errors**2))) if errors.size else math.nan,
-            map_iou=map_iou(grid, self.world),
+            map_iou=map_iou(self.slam.grid, self.world),
             grid=grid,
             truth=truth,
             estimate=estimate,
