@@ -51,7 +51,9 @@ class RrtNavigationConfig:
     time_budget_s: float = 0.3
     rate_hz: float = 10.0
     pose_timeout_s: float = 1.0
+    correction_timeout_s: float = 5.0
     map_frame: str = "map"
+    odom_frame: str = "odom"
     base_frame: str = "base_footprint"
     seed: int | None = None
     navigator: NavigatorConfig = field(default_factory=NavigatorConfig)
@@ -59,7 +61,7 @@ class RrtNavigationConfig:
     def __post_init__(self) -> None:
         if self.planner not in PLANNERS:
             raise InvalidInputError(f"~planner: expected one of {', '.join(PLANNERS)}, got {self.planner!r}")
-        for name in ("time_budget_s", "rate_hz", "pose_timeout_s"):
+        for name in ("time_budget_s", "rate_hz", "pose_timeout_s", "correction_timeout_s"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise InvalidInputError(f"~{name}: must be a positive number, got {value}")
@@ -96,7 +98,9 @@ class RrtNavigationConfig:
             time_budget_s=float(get("time_budget", 0.3)),
             rate_hz=float(get("rate", 10.0)),
             pose_timeout_s=float(get("pose_timeout", 1.0)),
+            correction_timeout_s=float(get("correction_timeout", 5.0)),
             map_frame=str(get("map_frame", "map")),
+            odom_frame=str(get("odom_frame", "odom")),
             base_frame=str(get("base_frame", "base_footprint")),
             seed=None if int(seed) < 0 else int(seed),
             navigator=navigator,
@@ -155,9 +159,15 @@ class RrtNavigationNode:
         self._report(events)
 
     def _pose(self) -> Pose2D | None:
-        """The robot pose in the map frame from tf, or None when unavailable or older than ``pose_timeout``."""
-        cfg = self.config
-        return latest_pose(self._tf_buffer, cfg.map_frame, cfg.base_frame, cfg.pose_timeout_s, "rrt_navigation")
+        """The robot pose in the map frame: the latest ``map -> odom`` correction (SLAM publishes it at its own
+        pace; no older than ``correction_timeout``) composed with the latest odometry ``odom -> base`` (no older
+        than ``pose_timeout``); None when either is missing or too old."""
+        cfg, who = self.config, "rrt_navigation"
+        odom = latest_pose(self._tf_buffer, cfg.odom_frame, cfg.base_frame, cfg.pose_timeout_s, who)
+        if odom is None:
+            return None
+        correction = latest_pose(self._tf_buffer, cfg.map_frame, cfg.odom_frame, cfg.correction_timeout_s, who)
+        return None if correction is None else correction.compose(odom)
 
     # -- control ----------------------------------------------------------------------------------------------
 
