@@ -21,7 +21,6 @@ import numpy.typing as npt
 from scipy import ndimage
 
 from mrs_nav.errors import InvalidInputError
-from mrs_nav.geometry import FloatArray
 
 BoolArray = npt.NDArray[np.bool_]
 IntArray = npt.NDArray[np.intp]
@@ -95,37 +94,10 @@ class OccupancyGrid:
         """``(height, width)``: True where the cell is occupied."""
         return self.values >= OCCUPIED_MIN
 
-    def cells_of(self, points: npt.ArrayLike) -> tuple[IntArray, IntArray, BoolArray]:
-        """Rows, columns and an inside-the-grid mask of ``(N, 2+)`` points given in metres.
+    def _cells(self, points: npt.ArrayLike) -> tuple[IntArray, IntArray, BoolArray]:
+        """Unclipped rows, columns and inside mask of points in metres (the hot path of every lookup).
 
-        Rows and columns of points outside the grid are clipped to the border (use the mask).
-        """
-        pts = np.atleast_2d(np.asarray(points, dtype=np.float64))
-        x = pts[:, 0] - self.origin[0]
-        y = pts[:, 1] - self.origin[1]
-        yaw = self.origin[2]
-        if yaw != 0.0:
-            c, s = math.cos(yaw), math.sin(yaw)
-            x, y = c * x + s * y, -s * x + c * y
-        col = np.floor(x / self.resolution).astype(np.intp)
-        row = np.floor(y / self.resolution).astype(np.intp)
-        inside = (col >= 0) & (col < self.width) & (row >= 0) & (row < self.height)
-        np.clip(col, 0, self.width - 1, out=col)
-        np.clip(row, 0, self.height - 1, out=row)
-        return row, col, inside
-
-    def cell_centres(self, rows: npt.ArrayLike, cols: npt.ArrayLike) -> FloatArray:
-        """``(N, 2)`` world coordinates of the centres of the given cells."""
-        u = (np.asarray(cols, dtype=np.float64) + 0.5) * self.resolution
-        v = (np.asarray(rows, dtype=np.float64) + 0.5) * self.resolution
-        c, s = math.cos(self.origin[2]), math.sin(self.origin[2])
-        return np.stack([self.origin[0] + c * u - s * v, self.origin[1] + s * u + c * v], axis=-1)
-
-    def lookup(self, mask: BoolArray, points: npt.ArrayLike) -> BoolArray:
-        """Vectorised lookup of a ``(height, width)`` boolean ``mask`` at points; outside the grid is False.
-
-        This is the planners' hot path, so it avoids clipping: outside cells are caught by one unsigned compare
-        per axis (negative indices wrap to huge values) and redirected to cell 0, then masked out.
+        Outside cells are caught by one unsigned compare per axis (negative indices wrap to huge values).
         """
         pts = np.asarray(points, dtype=np.float64)
         if pts.ndim == 1:
@@ -142,8 +114,21 @@ class OccupancyGrid:
         col = np.floor(u).astype(np.intp)
         row = np.floor(v).astype(np.intp)
         inside = (col.view(np.uintp) < self.width) & (row.view(np.uintp) < self.height)
+        return row, col, inside
+
+    def cells_of(self, points: npt.ArrayLike) -> tuple[IntArray, IntArray, BoolArray]:
+        """Rows, columns and an inside-the-grid mask of ``(N, 2)`` points (or one ``(2,)`` point) in metres.
+
+        Rows and columns of points outside the grid are clipped to the border (use the mask).
+        """
+        row, col, inside = self._cells(points)
+        return np.minimum(np.maximum(row, 0), self.height - 1), np.minimum(np.maximum(col, 0), self.width - 1), inside
+
+    def lookup(self, mask: BoolArray, points: npt.ArrayLike) -> BoolArray:
+        """Vectorised lookup of a ``(height, width)`` boolean ``mask`` at points; outside the grid is False."""
+        row, col, inside = self._cells(points)
         flat = row * self.width + col
-        flat *= inside
+        flat *= inside  # outside points read cell 0, then are masked out
         out: BoolArray = mask.reshape(-1).take(flat) & inside
         return out
 

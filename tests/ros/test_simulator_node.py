@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections.abc import Iterator
@@ -72,15 +73,17 @@ def test_scan_odom_tf_and_clock_arrive_at_their_rates_in_sim_time(simulation: An
         ),
     }
     try:
-        t0 = rospy.get_time() + 0.5  # after every subscription is connected
+        wait_for(lambda: all(rec.stamps for rec in recorders.values()), 60.0, "every topic")
+        t0 = max(rec.stamps[0] for rec in recorders.values())  # every subscription is connected from here
         wait_for(lambda: rospy.get_time() > t0 + 6.0, 120.0, "6 s of sim time")
         t1 = t0 + 5.0
         expected = {"/clock": 100.0, "/scan": 5.0, "/odom": 50.0, "/tf": 50.0}
         for topic, rate in expected.items():
             rec = recorders[topic]
             assert rec.period() == pytest.approx(1.0 / rate, rel=1e-6), topic
-            # a subscriber may lose a few messages at maximum rate, never most of them
-            assert rec.count_between(t0, t1) >= 0.8 * rate * (t1 - t0), topic
+            # At maximum rate a busy subscriber loses some messages (the publishers' queues are short on
+            # purpose: a late clock tick is worth less than the next one), never most of them.
+            assert rec.count_between(t0, t1) >= 0.5 * rate * (t1 - t0), topic
         scan = recorders["/scan"].last
         assert scan.header.frame_id == "base_scan"
         assert len(scan.ranges) == 360
@@ -119,6 +122,10 @@ def test_cmd_vel_moves_the_robot_and_the_watchdog_stops_it(simulation: Any) -> N
     try:
         wait_for(lambda: truth.last is not None and odom.last is not None, 30.0, "/ground_truth/odom and /odom")
         start_x = truth.last.pose.pose.position.x
+        broken = Twist()
+        broken.linear.x = math.nan
+        for _ in range(5):
+            pub.publish(broken)  # logged and ignored: the node must live on and obey the next good command
         forward = Twist()
         forward.linear.x = 0.2
 
@@ -140,3 +147,35 @@ def test_cmd_vel_moves_the_robot_and_the_watchdog_stops_it(simulation: Any) -> N
         pub.unregister()
         truth.sub.unregister()
         odom.sub.unregister()
+
+
+def test_running_into_a_wall_is_counted_and_the_body_stays_out(simulation: Any) -> None:
+    rospy = simulation
+    from geometry_msgs.msg import Twist
+    from nav_msgs.msg import Odometry
+    from std_msgs.msg import UInt32
+
+    truth = Recorder(rospy, "/ground_truth/odom", Odometry, lambda m: [m.header.stamp.to_sec()])
+    contacts = Recorder(rospy, "/ground_truth/contacts", UInt32, lambda m: [])
+    pub = rospy.Publisher("/cmd_vel", Twist, queue_size=10)
+    forward = Twist()
+    forward.linear.x = 0.22
+    deepest = -1.0
+    try:
+        wait_for(lambda: contacts.last is not None and truth.last is not None, 30.0, "latched contact count")
+        assert contacts.last.data == 0  # the earlier tests drove in the open
+
+        def pushed_for_a_while() -> bool:
+            nonlocal deepest
+            pub.publish(forward)
+            time.sleep(0.002)
+            deepest = max(deepest, truth.last.pose.pose.position.x + 0.105 - 2.0)  # east wall's face at x = 2
+            return bool(contacts.last.data > 0 and abs(truth.last.twist.twist.linear.x) < 0.01)
+
+        wait_for(pushed_for_a_while, 60.0, "the robot to hit the east wall and stall there", period=0.0)
+        assert contacts.last.data == 1
+        assert deepest < 0.005
+    finally:
+        pub.unregister()
+        truth.sub.unregister()
+        contacts.sub.unregister()

@@ -1,0 +1,115 @@
+"""Real ROS processes for benchmarks: a roscore on a free port, launches, reading /clock; all cleaned up.
+
+No rospy here (the benchmarks are part of the ROS-free core): processes are started with Debian's
+``roscore``/``roslaunch``/``rostopic`` and stopped by process group (SIGINT as Ctrl-C would, then SIGKILL).
+When run from a source checkout, the checkout is put first on ROS_PACKAGE_PATH and PYTHONPATH so that
+``roslaunch mrs_nav ...`` runs this code.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import signal
+import socket
+import subprocess
+import sys
+import time
+import xmlrpc.client
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+from mrs_nav.errors import MrsNavError
+
+CHECKOUT = Path(__file__).resolve().parents[3]
+
+
+class RosProcessError(MrsNavError):
+    """A ROS process the benchmark needs did not start or answer."""
+
+
+def free_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+def ros_env(uri: str, log_dir: Path) -> dict[str, str]:
+    """Environment for ROS processes on master ``uri``, logging under ``log_dir``, this interpreter's venv first."""
+    env = dict(os.environ)
+    env.update(
+        ROS_MASTER_URI=uri,
+        ROS_HOME=str(log_dir),
+        ROS_LOG_DIR=str(log_dir),
+        ROS_IP="127.0.0.1",
+        ROS_PYTHON_VERSION="3",
+        PATH=f"{Path(sys.executable).parent}:{env.get('PATH', '')}",
+    )
+    if (CHECKOUT / "package.xml").is_file():
+        env["ROS_PACKAGE_PATH"] = f"{CHECKOUT}:{env.get('ROS_PACKAGE_PATH', '')}".rstrip(":")
+        env["PYTHONPATH"] = f"{CHECKOUT / 'src'}:{env.get('PYTHONPATH', '')}".rstrip(":")
+    return env
+
+
+@contextlib.contextmanager
+def process(args: list[str], env: dict[str, str], log: Path) -> Iterator[subprocess.Popen[bytes]]:
+    """A process in its own group, output to ``log``, SIGINTed (then killed) at the end of the block."""
+    with log.open("wb") as out:
+        proc = subprocess.Popen(args, env=env, start_new_session=True, stdout=out, stderr=subprocess.STDOUT)
+        try:
+            yield proc
+        finally:
+            if proc.poll() is None:
+                with contextlib.suppress(ProcessLookupError):
+                    os.killpg(proc.pid, signal.SIGINT)
+                with contextlib.suppress(subprocess.TimeoutExpired):
+                    proc.wait(timeout=10)
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait(timeout=5)
+
+
+def wait_for_master(uri: str, timeout: float = 30.0) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            reply: Any = xmlrpc.client.ServerProxy(uri).getPid("/mrs_nav_bench")
+            if reply[0] == 1:
+                return
+        except OSError:
+            pass
+        time.sleep(0.1)
+    raise RosProcessError(f"roscore at {uri} did not come up within {timeout:.0f} s")
+
+
+@contextlib.contextmanager
+def roscore(log_dir: Path) -> Iterator[dict[str, str]]:
+    """A roscore on a free loopback port for the block; yields the environment for processes using it."""
+    port = free_port()
+    uri = f"http://127.0.0.1:{port}"
+    env = ros_env(uri, log_dir)
+    with process(["roscore", "-p", str(port)], env, log_dir / "roscore.log"):
+        wait_for_master(uri)
+        yield env
+
+
+def read_clock(env: dict[str, str], timeout: float = 20.0) -> tuple[float, float]:
+    """(sim seconds on /clock, monotonic wall time when it was read), via ``rostopic echo``."""
+    try:
+        out = subprocess.run(
+            ["rostopic", "echo", "-n", "1", "/clock"],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            check=False,
+        )
+    except subprocess.TimeoutExpired:
+        raise RosProcessError(f"no /clock within {timeout:.0f} s") from None
+    wall = time.monotonic()
+    match = re.search(r"secs:\s*(\d+)\s*\n\s*nsecs:\s*(\d+)", out.stdout)
+    if not match:
+        raise RosProcessError(f"could not read /clock: {out.stderr.strip()[-300:]}")
+    return int(match.group(1)) + int(match.group(2)) * 1e-9, wall
