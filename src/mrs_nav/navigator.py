@@ -169,6 +169,15 @@ def planning_grid(grid: OccupancyGrid, robot_radius: float, allow_unknown: bool)
     return grid.inflate(robot_radius)
 
 
+def cell_centres(grid: OccupancyGrid, rows: npt.ArrayLike, cols: npt.ArrayLike) -> FloatArray:
+    """``(N, 2)`` map coordinates (m) of the centres of the cells ``(rows[i], cols[i])`` of ``grid``."""
+    u = (np.asarray(cols, dtype=np.float64) + 0.5) * grid.resolution
+    v = (np.asarray(rows, dtype=np.float64) + 0.5) * grid.resolution
+    x0, y0, yaw = grid.origin
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.stack([x0 + c * u - s * v, y0 + s * u + c * v], axis=-1)
+
+
 def clear_footprint(grid: OccupancyGrid, raw: OccupancyGrid, position: npt.ArrayLike, radius: float) -> OccupancyGrid:
     """``grid`` with the cells within ``radius`` of ``position`` that are occupied only by inflation (not in
     ``raw``, the same grid before inflation) made free."""
@@ -177,7 +186,7 @@ def clear_footprint(grid: OccupancyGrid, raw: OccupancyGrid, position: npt.Array
     rows, cols, _ = grid.cells_of(np.array([p - reach, p + reach]))
     r0, r1, c0, c1 = rows[0], rows[1] + 1, cols[0], cols[1] + 1
     rr, cc = np.mgrid[r0:r1, c0:c1]
-    centres = grid.cell_centres(rr.ravel(), cc.ravel())
+    centres = cell_centres(grid, rr.ravel(), cc.ravel())
     near = np.hypot(*(centres - p).T) <= reach
     rr, cc = rr.ravel()[near], cc.ravel()[near]
     inflated_only = (grid.values[rr, cc] >= OCCUPIED) & ~raw.occupied_mask[rr, cc]

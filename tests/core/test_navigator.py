@@ -11,7 +11,7 @@ import pytest
 
 from mrs_nav.errors import InvalidInputError, NoPathFoundError
 from mrs_nav.geometry import Pose2D
-from mrs_nav.navigator import EventKind, GoalState, NavCommand, Navigator, NavigatorConfig, densify
+from mrs_nav.navigator import EventKind, GoalState, NavCommand, Navigator, NavigatorConfig, cell_centres, densify
 from mrs_nav.occupancy_grid import OCCUPIED, UNKNOWN, OccupancyGrid
 from mrs_nav.planning import PlanResult, headings_along, path_length
 
@@ -64,7 +64,7 @@ def astar(grid: OccupancyGrid, start: Pose2D, goal: tuple[float, float], rng: np
     while cells[-1] != (sr, sc):
         cells.append(parent[cells[-1]])
     rows, cols = np.array(cells[::-1]).T
-    points = grid.cell_centres(rows, cols)
+    points = cell_centres(grid, rows, cols)
     points[0] = (start.x, start.y)
     points[-1] = goal
     path = headings_along(points)

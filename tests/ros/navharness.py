@@ -16,15 +16,22 @@ FOOTPRINT_RADIUS = 0.105  # m, the simulated Burger's chassis
 
 
 class TruthTrack:
-    """Ground-truth positions (``/ground_truth/odom``) with their sim times, and the clearance to the world."""
+    """Ground-truth positions (``/ground_truth/odom``) with their sim times, the simulator's contact count
+    (``/ground_truth/contacts``) and the clearance to the world."""
 
     def __init__(self, rospy: Any, world: str) -> None:
         from nav_msgs.msg import Odometry
+        from std_msgs.msg import UInt32
 
         self.obstacles = Obstacles.from_world(load_world(REPO / "worlds" / world))
         self._lock = threading.Lock()
         self.samples: list[tuple[float, float, float]] = []
+        self.contacts = 0
         self.sub = rospy.Subscriber("/ground_truth/odom", Odometry, self._on_msg, queue_size=1000, tcp_nodelay=True)
+        self.contacts_sub = rospy.Subscriber("/ground_truth/contacts", UInt32, self._on_contacts, queue_size=10)
+
+    def _on_contacts(self, msg: Any) -> None:
+        self.contacts = int(msg.data)
 
     def _on_msg(self, msg: Any) -> None:
         p = msg.pose.pose.position
@@ -47,6 +54,7 @@ class TruthTrack:
 
     def close(self) -> None:
         self.sub.unregister()
+        self.contacts_sub.unregister()
 
 
 class StatusLog:

@@ -42,6 +42,7 @@ def test_the_course_arena_goal_is_reached_without_contact(
         assert math.hypot(x - 1.5, y - 1.5) <= 0.2
         assert reached_at < SIM_TIME_BOUND
         assert truth.min_clearance() > FOOTPRINT_RADIUS
+        assert truth.contacts == 0
         rows = trajectory_lines(trajectory)
         assert len(rows) > 100
         assert math.hypot(rows[0][1] + 1.5, rows[0][2] + 1.5) < 0.05

@@ -6,6 +6,7 @@ map -> odom transform, so the node's own behaviour is tested (goal refusal, pree
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Iterator
 from typing import Any
 
@@ -41,29 +42,41 @@ def navigation(ros_master: RosMaster, rospy_node: Any) -> Iterator[dict[str, Any
     """Simulator + rrt_navigation (slam:=false) + a known map and map -> odom from this process."""
     rospy = rospy_node
     import tf2_ros
-    from geometry_msgs.msg import TransformStamped
+    from geometry_msgs.msg import PoseStamped, TransformStamped
     from nav_msgs.msg import OccupancyGrid
 
     with (
         ros_master.launch("simulation.launch", f"real_time_factor:={RTF}", "x:=-1.5", "y:=-1.5", "yaw:=0") as sim,
         ros_master.launch("rrt_navigation.launch", "slam:=false", "seed:=3") as nav,
     ):
-        wait_for(lambda: rospy.get_time() > 0.5, 60.0, "/clock from the simulator")
-        static = tf2_ros.StaticTransformBroadcaster()
-        identity = TransformStamped()
-        identity.header.stamp = rospy.Time.now()
-        identity.header.frame_id, identity.child_frame_id = "map", "odom"
-        identity.transform.rotation.w = 1.0
-        static.sendTransform(identity)
+        truth = TruthTrack(rospy, "simple.world")
+        wait_for(lambda: truth.last() is not None, 60.0, "ground truth from the simulator")
+        # map -> odom as SLAM would send it (identity: odometry starts at the true start pose), every 20 ms of
+        # wall time from a plain thread (a rospy.Timer dies when sim time jumps back between test modules; a
+        # static transform would outlive this module in the test process)
+        tf_pub = tf2_ros.TransformBroadcaster()
+        stop = threading.Event()
+
+        def send_identity() -> None:
+            while not stop.wait(0.02):
+                identity = TransformStamped()
+                identity.header.stamp = rospy.Time.now()
+                identity.header.frame_id, identity.child_frame_id = "map", "odom"
+                identity.transform.rotation.w = 1.0
+                tf_pub.sendTransform(identity)
+
+        sender = threading.Thread(target=send_identity, daemon=True)
+        sender.start()
         map_pub = rospy.Publisher("/map", OccupancyGrid, queue_size=1, latch=True)
         map_pub.publish(arena_map_msg(rospy))
         status = StatusLog(rospy, "/rrt_navigation/status")
-        truth = TruthTrack(rospy, "simple.world")
-        goal_pub = rospy.Publisher(
-            "/move_base_simple/goal", __import__("geometry_msgs.msg").msg.PoseStamped, queue_size=1, latch=True
-        )
+        goal_pub = rospy.Publisher("/move_base_simple/goal", PoseStamped, queue_size=1, latch=True)
         wait_for(lambda: goal_pub.get_num_connections() > 0 and truth.last() is not None, 30.0, "the navigation node")
-        yield {"rospy": rospy, "status": status, "truth": truth, "goal": goal_pub, "procs": (sim, nav), "map": map_pub}
+        yield {"rospy": rospy, "status": status, "truth": truth, "goal": goal_pub, "procs": (sim, nav)}
+        stop.set()
+        sender.join()
+        for pub in (map_pub, goal_pub, tf_pub.pub_tf):
+            pub.unregister()
         status.close()
         truth.close()
 
@@ -113,4 +126,5 @@ def test_a_second_goal_preempts_the_first_and_is_reached(navigation: dict[str, A
     _, x, y = truth.last()
     assert math.hypot(x + 1.5, y - 1.5) <= 0.2
     assert truth.min_clearance() > FOOTPRINT_RADIUS
+    assert truth.contacts == 0
     assert rospy.get_time() < 90.0

@@ -49,11 +49,12 @@ def test_the_arena_goal_is_reached_on_the_slam_map_without_contact(ros_master: R
         _, x, y = truth.last()
         assert math.hypot(x - 1.5, y - 1.5) <= 0.2
         assert truth.min_clearance() > FOOTPRINT_RADIUS
+        assert truth.contacts == 0
         assert finished - started < SIM_TIME_BOUND
         assert paths
         assert paths[-1].header.frame_id == "map"
     finally:
-        for sub in (map_sub, path_sub):
-            sub.unregister()
+        for topic in (map_sub, path_sub, goal_pub):
+            topic.unregister()
         truth.close()
         status.close()

@@ -26,7 +26,7 @@ from mrs_nav.bench.results import markdown_table
 from mrs_nav.demo import Demo, DemoConfig
 from mrs_nav.errors import InvalidInputError, NoPathFoundError
 from mrs_nav.geometry import FloatArray, Pose2D
-from mrs_nav.navigator import densify
+from mrs_nav.navigator import cell_centres, densify
 from mrs_nav.occupancy_grid import BURGER_RADIUS, OccupancyGrid
 from mrs_nav.planning import path_length
 from mrs_nav.rasterize import rasterize_world
@@ -83,7 +83,7 @@ def shortest_path_length(
     if cells[-1] != index[sr, sc]:
         raise NoPathFoundError("no collision-free path between the benchmark start and goal")
     cells.reverse()
-    points = grid.cell_centres(np.array(cells) // w, np.array(cells) % w)
+    points = cell_centres(grid, np.array(cells) // w, np.array(cells) % w)
     points[0], points[-1] = (start.x, start.y), goal
     return path_length(_shortcut(points, grid))
 

@@ -58,7 +58,8 @@ def latest_pose(buffer: tf2_ros.Buffer, frame: str, child: str, timeout_s: float
     except tf2_ros.TransformException as err:
         rospy.logwarn_throttle(5.0, f"{who}: no robot pose: {err}")
         return None
-    age = (rospy.Time.now() - transform.header.stamp).to_sec()
+    stamp = transform.header.stamp
+    age = 0.0 if stamp.is_zero() else (rospy.Time.now() - stamp).to_sec()  # a static transform has no age
     if age > timeout_s:
         rospy.logwarn_throttle(5.0, f"{who}: the robot pose from tf is {age:.1f} s old")
         return None
