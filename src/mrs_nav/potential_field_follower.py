@@ -44,6 +44,9 @@ class FieldFollowerConfig:
     safety_margin: float = 0.05
     decay: float = DEFAULT_DECAY
     goal_tolerance: float = 0.1
+    # Done also when it has come this close and stopped making progress (obstacles near the goal can hold the
+    # field's equilibrium a little short of it).
+    settle_radius: float = 0.2
     noise_std: float = 0.02
     stall_move: float = 0.1
     stall_time_s: float = 2.0
@@ -117,6 +120,9 @@ class FieldFollower:
         field = self.field.velocity(here, attractive_noise=noise)[0]
         if self._anchor is None or float(np.hypot(*(here - self._anchor))) >= cfg.stall_move:
             self._anchor, self._anchor_time = here, now
+        if distance <= cfg.settle_radius and now - self._anchor_time >= cfg.stall_time_s:
+            self.walking = False
+            return FieldCommand(0.0, 0.0, True, 0.0, False)
         if self.walking:
             velocity = self._walk(here, field, now)
             if not self.walking:
@@ -160,11 +166,11 @@ class FieldFollower:
 
 
 def scan_obstacles(
-    pose: Pose2D, angles: FloatArray, ranges: FloatArray, sector: float = math.radians(10.0)
+    pose: Pose2D, angles: FloatArray, ranges: FloatArray, sector: float = math.radians(45.0)
 ) -> Obstacles:
     """Obstacles seen in a scan taken at ``pose`` (the laser's pose in the map frame): per ``sector`` of
     bearing, the nearest return as a small circle (one per sector keeps a wall from adding up to a wall of
-    repulsion many times stronger than a post)."""
+    repulsion many times stronger than a post: the repulsion is a sum over obstacles)."""
     ok = np.isfinite(ranges)
     angles, ranges = angles[ok], ranges[ok]
     if ranges.size == 0:

@@ -44,6 +44,28 @@ def test_the_course_arena_goal_is_reached_without_contact(seed: int) -> None:
     assert sim.time < 90.0
 
 
+def test_obstacles_seen_in_the_scans_alone_are_enough_in_the_arena() -> None:
+    world = load_world(WORLDS / "simple.world")
+    sim = Simulator(world, SimulatorConfig(seed=3), Pose2D(-1.5, -1.5, 0.0))
+    follower = FieldFollower((1.5, 1.5), Obstacles(), rng=np.random.default_rng(3))
+    laser = sim.config.laser
+    angles = laser.angle_min + 2.0 * math.pi / laser.beams * np.arange(laser.beams)
+    while sim.time < 120.0:
+        truth = sim.ground_truth()
+        if sim.last_scan is not None:
+            mount = truth.compose(Pose2D(laser.mount_x, laser.mount_y, 0.0))
+            follower.set_obstacles(scan_obstacles(mount, angles, sim.last_scan.ranges))
+        command = follower.command(truth, sim.time)
+        if command.done:
+            break
+        sim.set_command(command.u, command.omega)
+        sim.run(0.1)
+    truth = sim.ground_truth()
+    assert command.done
+    assert math.hypot(truth.x - 1.5, truth.y - 1.5) <= 0.2
+    assert sim.contacts.events == 0
+
+
 def test_a_true_local_minimum_is_escaped_by_the_random_walk() -> None:
     trap = two_cylinder_trap()
     reached = 0
@@ -68,7 +90,7 @@ def test_a_true_local_minimum_is_escaped_by_the_random_walk() -> None:
 def test_scan_obstacles_keep_the_nearest_return_per_sector() -> None:
     angles = np.radians(np.arange(360.0))
     ranges = np.full(360, np.inf)
-    ranges[0:5] = [1.0, 0.9, 1.1, 1.2, 1.3]  # one sector (0-10 degrees): nearest is 0.9 m at 1 degree
+    ranges[0:5] = [1.0, 0.9, 1.1, 1.2, 1.3]  # one sector (0-45 degrees): nearest is 0.9 m at 1 degree
     ranges[90] = 2.0
     obstacles = scan_obstacles(Pose2D(1.0, 0.0, math.pi / 2), angles, ranges)
     centres = obstacles.circles[:, :2]

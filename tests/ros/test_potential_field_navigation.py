@@ -19,8 +19,9 @@ RTF = "10"
 SIM_TIME_BOUND = 90.0  # s, the core tests take 30-55 s
 
 
+@pytest.mark.parametrize("obstacles", ["world", "scan"])
 def test_the_course_arena_goal_is_reached_without_contact(
-    ros_master: RosMaster, rospy_node: Any, tmp_path: Path
+    obstacles: str, ros_master: RosMaster, rospy_node: Any, tmp_path: Path
 ) -> None:
     rospy = rospy_node
     truth = TruthTrack(rospy, "simple.world")
@@ -33,6 +34,7 @@ def test_the_course_arena_goal_is_reached_without_contact(
             "goal_x:=1.5",
             "goal_y:=1.5",
             "seed:=1",
+            f"obstacles:={obstacles}",
             f"trajectory_file:={trajectory}",
         ) as proc:
             wait_for(lambda: proc.poll() is not None or status.has("reached"), 120.0, "the goal to be reached")
