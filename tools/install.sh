@@ -13,7 +13,7 @@ apt_packages=(
   python3-tf2-ros python3-tf python3-tf2-geometry-msgs
   python3-std-msgs python3-geometry-msgs python3-nav-msgs python3-sensor-msgs
   python3-visualization-msgs python3-tf2-msgs ros-robot-state-publisher
-  python3-pyode python3-numpy python3-scipy python3-venv python3-pip
+  python3-pyode python3-numpy python3-scipy python3-yaml python3-venv python3-pip
   xvfb xdotool imagemagick
 )
 if [ "${MRS_NAV_RVIZ:-0}" = 1 ]; then apt_packages+=(rviz); fi

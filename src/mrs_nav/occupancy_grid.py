@@ -94,8 +94,8 @@ class OccupancyGrid:
         """``(height, width)``: True where the cell is occupied."""
         return self.values >= OCCUPIED_MIN
 
-    def _cells(self, points: npt.ArrayLike) -> tuple[IntArray, IntArray, BoolArray]:
-        """Unclipped rows, columns and inside mask of points in metres (the hot path of every lookup).
+    def cells(self, points: npt.ArrayLike) -> tuple[IntArray, IntArray, BoolArray]:
+        """Unclipped rows, columns and inside mask of ``(N, 2)`` points in metres (the hot path of every lookup).
 
         Outside cells are caught by one unsigned compare per axis (negative indices wrap to huge values).
         """
@@ -121,12 +121,12 @@ class OccupancyGrid:
 
         Rows and columns of points outside the grid are clipped to the border (use the mask).
         """
-        row, col, inside = self._cells(points)
+        row, col, inside = self.cells(points)
         return np.minimum(np.maximum(row, 0), self.height - 1), np.minimum(np.maximum(col, 0), self.width - 1), inside
 
     def lookup(self, mask: BoolArray, points: npt.ArrayLike) -> BoolArray:
         """Vectorised lookup of a ``(height, width)`` boolean ``mask`` at points; outside the grid is False."""
-        row, col, inside = self._cells(points)
+        row, col, inside = self.cells(points)
         flat = row * self.width + col
         flat *= inside  # outside points read cell 0, then are masked out
         out: BoolArray = mask.reshape(-1).take(flat) & inside

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -143,17 +144,26 @@ def _pick_parent(tree: ArcTree, position: FloatArray, config: RRTConfig) -> int 
 
 
 def grow_rrt(
-    start: Pose2D, goal: FloatArray, grid: OccupancyGrid, config: RRTConfig, rng: np.random.Generator
+    start: Pose2D,
+    goal: FloatArray,
+    grid: OccupancyGrid,
+    config: RRTConfig,
+    rng: np.random.Generator,
+    *,
+    clock: Callable[[], float] = time.perf_counter,
 ) -> Search:
-    """Run RRT from ``start`` to ``goal`` (x, y) on ``grid``; return the result with its tree (for drawing)."""
-    t0 = time.perf_counter()
+    """Run RRT from ``start`` to ``goal`` (x, y) on ``grid``; return the result with its tree (for drawing).
+
+    Times and the budget are read from ``clock`` (wall time by default; benchmarks on a shared machine may pass
+    :func:`time.process_time`)."""
+    t0 = clock()
     goal = np.asarray(goal, dtype=np.float64)[:2]
     check_query(grid, start, goal)
     tree = ArcTree(start)
     deadline = math.inf if config.time_budget is None else t0 + config.time_budget
     limit = config.iterations if config.iterations is not None else math.inf
     iteration = 0
-    while iteration < limit and time.perf_counter() < deadline:
+    while iteration < limit and clock() < deadline:
         iteration += 1
         position = sample_random_position(grid, rng, goal, config.goal_bias)
         parent = _pick_parent(tree, position, config)
@@ -168,19 +178,20 @@ def grow_rrt(
         if (config.connect_goal and to_goal <= config.max_step) or reached:
             final = arcs.connect(position, tree.yaw[node], goal)
             if to_goal <= 1e-9 or arcs.checked(final, grid, math.pi / 2, config.min_turning_radius)[0]:
-                return _solved(tree, node, None if to_goal <= 1e-9 else goal, grid, t0=t0, iterations=iteration)
+                return _solved(
+                    tree, node, None if to_goal <= 1e-9 else goal, grid, elapsed=clock() - t0, iterations=iteration
+                )
         if reached:
-            return _solved(tree, node, None, grid, t0=t0, iterations=iteration)
-    elapsed = time.perf_counter() - t0
+            return _solved(tree, node, None, grid, elapsed=clock() - t0, iterations=iteration)
+    elapsed = clock() - t0
     reason = "iteration budget used up" if iteration >= limit else "time budget used up"
     return Search(failed(start, elapsed, iteration, len(tree), f"no path found: {reason}"), tree, ())
 
 
 def _solved(
-    tree: ArcTree, node: int, tail: FloatArray | None, grid: OccupancyGrid, *, t0: float, iterations: int
+    tree: ArcTree, node: int, tail: FloatArray | None, grid: OccupancyGrid, *, elapsed: float, iterations: int
 ) -> Search:
     path = tree.path_poses(tree.branch(node), grid.resolution, tail)
-    elapsed = time.perf_counter() - t0
     length = path_length(path)
     result = PlanResult(True, path, length, elapsed, elapsed, iterations, len(tree), "goal reached")
     return Search(result, tree, ((iterations, elapsed, length),))

@@ -93,7 +93,7 @@ _CLUTTER = OccupancyGrid(_VALUES, 0.05, (-1.0, -1.0, 0.0))
 _coord = st.floats(-0.95, 0.95)
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=500, deadline=None)
 @given(_coord, _coord, st.floats(-math.pi, math.pi), _coord, _coord)
 def test_an_arc_accepted_as_free_is_free_everywhere_at_one_centimetre(
     x1: float, y1: float, yaw: float, x2: float, y2: float
@@ -103,3 +103,16 @@ def test_an_arc_accepted_as_free_is_free_everywhere_at_one_centimetre(
         return
     dense, _ = arcs.sample(batch, 0.01)
     assert _CLUTTER.is_free(dense).all()
+
+
+def test_arcs_hugging_an_obstacle_pass_the_fine_check_but_not_a_blocked_corner() -> None:
+    values = np.zeros((40, 40), dtype=np.int8)
+    values[20:, 20:] = OCCUPIED  # the quadrant x, y >= 0 of a grid from -1 to 1 m
+    grid = OccupancyGrid(values, 0.05, (-1.0, -1.0, 0.0))
+    # a straight line 1 cm below the blocked quadrant: its cells are free, their neighbours are not
+    assert arcs.checked(arcs.connect([-0.9, -0.01], 0.0, [0.9, -0.01]), grid)[0]
+    # a diagonal cutting 1 mm off the quadrant's corner: no sample lands in the blocked cell, the corner rule sees it
+    cutting = arcs.connect([-0.5, 0.501], -math.pi / 4, [0.5, -0.499])
+    assert grid.is_free(arcs.sample(cutting, 0.05 / 8)[0]).all()
+    assert not arcs.checked(cutting, grid)[0]
+    assert arcs.checked(arcs.connect([-0.5, 0.49], -math.pi / 4, [0.5, -0.51]), grid)[0]  # 1 cm clear

@@ -99,6 +99,15 @@ def test_rrt_star_beats_rrt_over_twenty_seeds(arena: OccupancyGrid) -> None:
     assert statistics.median(r.length_m for r in star) < statistics.median(r.length_m for r in plain)
 
 
+def test_a_start_and_goal_next_to_the_inflated_walls_can_be_left_and_reached(arena: OccupancyGrid) -> None:
+    start, goal = Pose2D(1.87, -1.0, math.pi / 2), np.array([-1.87, 1.87])
+    assert not arena.lookup(arena.conservative_free_mask, start.position)[0]  # within a cell of the inflation
+    config = RRTStarConfig(iterations=600, time_budget=None)
+    search = grow_rrt_star(start, goal, arena, config, np.random.default_rng(0))
+    assert search.result.success
+    assert_valid_path(search.result.path, arena, start, goal, 1e-9)
+
+
 def test_minimum_turning_radius_is_respected(arena: OccupancyGrid) -> None:
     config = RRTStarConfig(iterations=400, time_budget=None, min_turning_radius=0.3)
     search = grow_rrt_star(START, GOAL, arena, config, np.random.default_rng(1))

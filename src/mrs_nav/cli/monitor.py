@@ -1,19 +1,128 @@
-"""``mrs-nav monitor``: watch a robot through the Zenoh bridge."""
+"""``mrs-nav monitor``: watch a robot through the Zenoh bridge, with no ROS installed.
+
+Needs only eclipse-zenoh and rosbags: topics are discovered through the bridge's liveliness tokens, their
+definitions fetched from its ``@types`` queryable and the messages decoded with rosbags.
+"""
 
 from __future__ import annotations
 
 import argparse
+import sys
+import time
+from pathlib import Path
 from typing import Any
 
-from mrs_nav.cli.common import fail
+from mrs_nav.cli.common import parse_floats, print_json
+from mrs_nav.errors import InvalidInputError, MrsNavError
+
+# ANSI: cursor home + clear screen, for the live redraw on a terminal.
+_CLEAR = "\x1b[H\x1b[2J"
 
 
 def register(subparsers: Any) -> None:
     parser: argparse.ArgumentParser = subparsers.add_parser(
-        "monitor", help="watch a robot through the Zenoh bridge (not available yet)"
+        "monitor",
+        help="watch a robot through the Zenoh bridge (no ROS needed)",
+        description="Connect to a zenoh_bridge, show pose, speed, goal, path, map and per-topic rates and "
+        "latencies; optionally draw a snapshot or send a goal.",
     )
+    parser.add_argument(
+        "--connect",
+        action="append",
+        required=True,
+        metavar="ENDPOINT",
+        help="Zenoh endpoint of the bridge or a router, e.g. tcp/127.0.0.1:7447 (repeatable)",
+    )
+    parser.add_argument("--prefix", default="mrs_nav", help="key prefix of the robot (default: mrs_nav)")
+    parser.add_argument("--once", action="store_true", help="wait for data (see --duration), print once and exit")
+    parser.add_argument(
+        "--duration", type=float, default=None, metavar="S", help="run S seconds then exit (with --once: wait S s)"
+    )
+    parser.add_argument("--period", type=float, default=0.5, metavar="S", help="redraw period, s (default 0.5)")
+    parser.add_argument("--json", action="store_true", help="print the final dashboard as one JSON object")
+    parser.add_argument("--snapshot", type=Path, default=None, metavar="PNG", help="draw map, robot and path here")
+    parser.add_argument("--send-goal", default=None, metavar="X,Y,YAW", help="ask the bridge to publish this goal")
+    parser.add_argument("--frame", default="map", help="frame of --send-goal (default: map)")
+    parser.add_argument("--timeout", type=float, default=2.0, metavar="S", help="query timeout, s (default 2)")
     parser.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    return fail("'mrs-nav monitor' is not available in this version yet")
+    # Imported here so that zenoh, rosbags and matplotlib load only when this command runs.
+    from mrs_nav.bridge.monitor import RemoteMonitor  # noqa: PLC0415
+
+    if args.duration is not None and args.duration < 0:
+        raise InvalidInputError(f"--duration {args.duration}: expected seconds >= 0")
+    goal = parse_floats(args.send_goal, 3, "--send-goal") if args.send_goal else None
+    connect = [e.strip() for item in args.connect for e in item.split(",") if e.strip()]
+    with RemoteMonitor(connect, args.prefix, timeout=args.timeout) as monitor:
+        if goal is not None:
+            accepted, answer = monitor.send_goal(goal[0], goal[1], goal[2], frame=args.frame)
+            if not accepted:
+                print(f"ERROR: goal not sent: {answer}", file=sys.stderr)
+                return 1
+            print(f"goal ({goal[0]:g}, {goal[1]:g}, {goal[2]:g}) sent: {answer}")
+            if args.duration is None and not args.once:
+                return 0
+        summary = _watch(monitor, args)
+        if args.snapshot is not None:
+            _snapshot(monitor, args.snapshot)
+    if args.json:
+        print_json(summary)
+    return 0
+
+
+def _watch(monitor: Any, args: argparse.Namespace) -> dict[str, Any]:
+    """Redraw until the duration is over (forever without one); return the last summary."""
+    from mrs_nav.bridge.dashboard import render  # noqa: PLC0415
+
+    live = sys.stdout.isatty() and not args.json and not args.once
+    start = time.monotonic()
+    wait = args.duration if args.duration is not None else (2.0 if args.once else None)
+    title = f"mrs-nav monitor: {monitor.prefix} via {', '.join(monitor.connect)}"
+    while True:
+        done = wait is not None and time.monotonic() - start >= wait
+        summary = _summary(monitor)
+        if live:
+            sys.stdout.write(_CLEAR + render(summary, title) + "\n")
+            sys.stdout.flush()
+        if done:
+            break
+        time.sleep(max(0.05, args.period))
+    if not live and not args.json:
+        print(render(summary, title))
+    return summary
+
+
+def _summary(monitor: Any) -> dict[str, Any]:
+    from mrs_nav.bridge.dashboard import summarise  # noqa: PLC0415
+
+    stats = monitor.topics()
+    messages: dict[str, Any] = {}
+    errors: dict[str, str] = {}
+    for topic in ("/odom", "/move_base_simple/goal", "/path", "/map"):
+        if topic in stats:
+            try:
+                msg = monitor.latest(topic)
+            except MrsNavError as err:  # one undecodable topic must not blank the whole dashboard
+                errors[topic] = str(err)
+                continue
+            if msg is not None:
+                messages[topic] = msg
+    summary = summarise(messages, stats, time.monotonic())
+    if errors:
+        summary["errors"] = errors
+    return summary
+
+
+def _snapshot(monitor: Any, out: Path) -> None:
+    from mrs_nav.bridge.snapshot import draw_snapshot  # noqa: PLC0415
+
+    def get(topic: str) -> Any:
+        try:
+            return monitor.latest(topic)
+        except MrsNavError:
+            return None
+
+    draw_snapshot(out, get("/map"), get("/odom"), get("/path"), get("/move_base_simple/goal"))
+    print(f"snapshot written to {out}", file=sys.stderr)

@@ -20,9 +20,10 @@ from mrs_nav.bag.io import read_messages
 from mrs_nav.bag.messages import pose_from_odometry, scan_from_message, stamp_of
 from mrs_nav.errors import MrsNavError
 from mrs_nav.geometry import Pose2D, yaw_from_quaternion
+from mrs_nav.map_io import save_map
+from mrs_nav.occupancy_grid import OccupancyGrid
 from mrs_nav.replay.pose_track import PoseTrack
 from mrs_nav.slam.config import SlamConfig
-from mrs_nav.slam.map_export import write_map
 from mrs_nav.slam.metrics import TrajectoryErrors, align_se2, trajectory_errors
 from mrs_nav.slam.slam import Slam
 
@@ -149,7 +150,8 @@ def write_outputs(result: SlamReplay, out_dir: Path, name: str = "slam_map") -> 
     grid = result.slam.grid
     # Trajectory poses are refreshed from the SLAM state, which loop closure may have corrected since.
     estimate = [p.pose for p in result.slam.processed]
-    yaml = write_map(out_dir / name, grid.to_occupancy(), grid.resolution, (grid.origin_x, grid.origin_y))
+    occupancy = OccupancyGrid(grid.to_occupancy(), grid.resolution, (grid.origin_x, grid.origin_y, 0.0))
+    yaml = save_map(occupancy, out_dir / f"{name}.yaml")
     csv = out_dir / "trajectory.csv"
     lines = ["stamp,x,y,yaw,odom_x,odom_y,odom_yaw,truth_x,truth_y,truth_yaw"]
     for i, (t, est, od) in enumerate(zip(result.stamps, estimate, result.odometry, strict=True)):

@@ -32,7 +32,7 @@ from mrs_nav.slam import LaserScanData, Slam, SlamConfig
 
 # Parameters of SlamConfig the node reads (gmapping's names where gmapping has them).
 _SLAM_PARAMS = tuple(f.name for f in dataclasses.fields(SlamConfig))
-_TIME_JUMP = 1.0  # s: a scan this much older than the last one means sim time went back
+_TIME_JUMP = 1.0  # s: the clock this much behind its last reading means sim time went back (a bag restarted)
 
 
 @dataclass(frozen=True)
@@ -80,7 +80,7 @@ class SlamNode:
         self._lock = threading.Lock()
         self._slam: Slam | None = None  # made at the first scan, once the laser's mounting is known
         self._laser_frame = ""
-        self._last_stamp = -math.inf
+        self._last_clock = -math.inf
         self._last_map_time = -math.inf
         self._last_tf_stamp = -math.inf
         self._buffer = tf2_ros.Buffer(cache_time=rospy.Duration(30.0))
@@ -95,13 +95,15 @@ class SlamNode:
 
     def _on_scan(self, msg: LaserScan) -> None:
         stamp = msg.header.stamp.to_sec()
-        if stamp < self._last_stamp - _TIME_JUMP:
-            rospy.logwarn(f"slam: time went back {self._last_stamp - stamp:.1f} s; starting a new map")
+        # The clock, not the scans' stamps, decides whether time went back: one bogus stamp must not reset.
+        now = rospy.get_time()
+        if now < self._last_clock - _TIME_JUMP:
+            rospy.logwarn(f"slam: time went back {self._last_clock - now:.1f} s; starting a new map")
             with self._lock:
                 self._slam = None
             self._buffer.clear()
             self._last_tf_stamp = -math.inf
-        self._last_stamp = stamp
+        self._last_clock = now
         try:
             scan = scan_data(msg)
             odom = self._lookup(self.config.odom_frame, self.config.base_frame, msg.header.stamp)

@@ -20,10 +20,10 @@ class SlamConfig:
 
     Attributes (gmapping's names):
         delta: map resolution, metres per cell.
-        maxUrange: usable laser range, metres. Longer beams (and "no return" beams) only clear free space up
-            to this distance; their end points are not marked occupied.
-        maxRange: readings at or beyond this (or the scan's own ``range_max``) are "no return". ``0`` means
-            use the scan's ``range_max``.
+        maxUrange: usable laser range, metres. Longer readings only clear free space up to this distance;
+            their end points are not marked occupied.
+        maxRange: readings at or beyond this (or the scan's own ``range_max``) are "no return" and ignored,
+            as in gmapping. ``0`` means use the scan's ``range_max``.
         linearUpdate, angularUpdate: process a scan once the robot has travelled this far (m) or turned this
             much (rad) since the last processed scan.
         temporalUpdate: also process a scan when this much time (s) has passed since the last one; a value
@@ -37,7 +37,7 @@ class SlamConfig:
             the odometry prediction (m, rad).
         srr, srt, str, stt: odometry error model of the matcher's prior (gmapping's names): the prediction's
             position spread is ``srr * travelled + srt * turned`` (m) and its heading spread
-            ``str * travelled + stt * turned`` (rad), plus a floor of 2 cm and 1 degree.
+            ``str * travelled + stt * turned`` (rad), plus a floor of 1 cm and 0.5 degree.
         sigma: standard deviation of the likelihood field (m) used to score a scan against the map.
     """
 

@@ -1,8 +1,9 @@
 """Map quality against a known world: the world rasterised on the map's grid, and intersection over union.
 
-A cell is occupied in the world when its square touches an obstacle footprint (box footprints and cylinders
-grown by half a cell; exact for axis-aligned boxes). The IoU of occupied cells is taken over the cells the map
-has observed (free or occupied), since a map cannot be blamed for what its laser never saw (wall interiors).
+A cell is occupied in the world when its square reaches into an obstacle footprint
+(:func:`mrs_nav.rasterize.rasterize_world`, the rule the planners use). The IoU of occupied cells is taken over
+the cells the map has observed (free or occupied), since a map cannot be blamed for what its laser never saw
+(wall interiors).
 """
 
 from __future__ import annotations
@@ -14,27 +15,26 @@ import numpy as np
 import numpy.typing as npt
 from scipy import ndimage
 
+from mrs_nav.rasterize import rasterize_world
 from mrs_nav.slam.grid import LogOddsGrid
 from mrs_nav.world import World
 
 BoolArray = npt.NDArray[np.bool_]
 
 
-def rasterise_world(world: World, grid: LogOddsGrid, cells: tuple[npt.NDArray[np.int64], ...]) -> BoolArray:
-    """Whether each cell ``(iy, ix)`` of ``grid`` (given as two index arrays) touches an obstacle of ``world``."""
-    iy, ix = cells
-    half = 0.5 * grid.resolution
-    x = grid.origin_x + (ix + 0.5) * grid.resolution
-    y = grid.origin_y + (iy + 0.5) * grid.resolution
-    hit = np.zeros(x.shape, dtype=bool)
-    for box in world.boxes:
-        c, s = math.cos(box.yaw), math.sin(box.yaw)
-        dx, dy = x - box.x, y - box.y
-        lx, ly = c * dx + s * dy, -s * dx + c * dy
-        hit |= (np.abs(lx) <= box.size_x / 2 + half) & (np.abs(ly) <= box.size_y / 2 + half)
-    for cyl in world.cylinders:
-        hit |= np.hypot(x - cyl.x, y - cyl.y) <= cyl.radius + half
-    return hit
+def world_cells(world: World, grid: LogOddsGrid) -> BoolArray:
+    """Whether each cell of ``grid`` touches an obstacle of ``world`` (rasterised with the planners' rules)."""
+    raster = rasterize_world(world, grid.resolution)
+    out = np.zeros((grid.height, grid.width), dtype=bool)
+    # Both grids have origins on multiples of the resolution, so one is a shifted window of the other.
+    dx = round((raster.origin[0] - grid.origin_x) / grid.resolution)
+    dy = round((raster.origin[1] - grid.origin_y) / grid.resolution)
+    occupied = raster.occupied_mask
+    x0, y0 = max(dx, 0), max(dy, 0)
+    x1, y1 = min(dx + raster.width, grid.width), min(dy + raster.height, grid.height)
+    if x1 > x0 and y1 > y0:
+        out[y0:y1, x0:x1] = occupied[y0 - dy : y1 - dy, x0 - dx : x1 - dx]
+    return out
 
 
 def map_iou(
@@ -53,8 +53,8 @@ def map_iou(
     observed = np.nonzero(occupancy >= 0)
     if observed[0].size == 0:
         return 0.0
-    truth_grid = np.zeros(occupancy.shape, dtype=bool)
-    truth_grid[observed] = rasterise_world(_world_in_map(world, world_origin), grid, observed)
+    truth_grid = world_cells(_world_in_map(world, world_origin), grid)
+    truth_grid[occupancy < 0] = False
     mapped_grid = occupancy == 100
     if tolerance <= 0:
         union = int(np.sum(mapped_grid | truth_grid))

@@ -6,8 +6,10 @@ the scan can reach, and into a likelihood field ``L = exp(-D^2 / (2 sigma^2))``.
 1. Coarse search (Olson, "Real-time correlative scan matching", ICRA 2009): for every candidate heading in the
    angular window, every translation on a grid of ``COARSE`` cells is scored with ``L`` max-pooled over
    ``COARSE`` x ``COARSE`` cells, an upper bound of the fine score anywhere in that block, minus the odometry
-   prior ``PRIOR_WEIGHT * 0.5 * (dx^2 + dy^2) / s_xy^2 + dtheta^2 / s_theta^2)`` with the spreads expected of
-   the odometry over the motion since the last scan. Without it a scan in a featureless corridor slides along.
+   prior ``PRIOR_WEIGHT * log(1 + z^2 / 2)``, ``z^2 = (dx^2 + dy^2) / s_xy^2 + dtheta^2 / s_theta^2`` with the
+   spreads expected of the odometry over the motion since the last scan: a Cauchy (heavy-tailed) prior, so a
+   scan in a featureless corridor does not slide along it, yet a clear match far from a bad odometry reading
+   still wins.
 2. Fine search: the best coarse blocks are searched cell by cell with a finer angular step.
 3. Refinement: point-to-line ICP (Gauss-Newton, Huber-weighted) where each scan point is paired with the mean
    end point of its nearest occupied cell (found through the distance transform's nearest-cell indices) and the
@@ -225,7 +227,8 @@ class ScanMatcher:
         ox = (base[0] + offsets) * res / spread[0]
         oy = (base[1] + offsets) * res / spread[0]
         oa = angles / spread[1]
-        penalty = 0.5 * PRIOR_WEIGHT * (oa[:, None, None] ** 2 + ox[None, :, None] ** 2 + oy[None, None, :] ** 2)
+        z2 = oa[:, None, None] ** 2 + ox[None, :, None] ** 2 + oy[None, None, :] ** 2
+        penalty = PRIOR_WEIGHT * np.log1p(0.5 * z2)
         return np.asarray(score - penalty, dtype=np.float64)
 
     def refine(
@@ -265,8 +268,10 @@ class ScanMatcher:
             weight = np.where(np.abs(r) <= huber, 1.0, huber / np.maximum(np.abs(r), 1e-12))
             w = weight / ((POINT_SIGMA_CELLS * res) ** 2 * max(1.0, n / INDEPENDENT_POINTS))
             deviation = np.array([x - prior.x, y - prior.y, wrap_angle(yaw - prior.yaw)])
-            hess = (jac * w[:, None]).T @ jac + np.diag(prior_info)
-            step = -np.linalg.solve(hess, (jac * w[:, None]).T @ r + prior_info * deviation)
+            # Iteratively reweighted Cauchy prior, as in the search: far from odometry it pulls less.
+            info = prior_info / (1.0 + 0.5 * float(np.sum(prior_info * deviation**2)))
+            hess = (jac * w[:, None]).T @ jac + np.diag(info)
+            step = -np.linalg.solve(hess, (jac * w[:, None]).T @ r + info * deviation)
             x, y, yaw = x + step[0], y + step[1], yaw + step[2]
             if abs(step[0]) + abs(step[1]) < 1e-5 and abs(step[2]) < 1e-5:
                 break

@@ -23,8 +23,8 @@ from mrs_nav.slam.scan import BeamSplit, LaserScanData, split_beams
 
 MIN_POINTS = 10  # fewer end points than this: trust odometry, the match would be noise
 FIELD_MAX_DISTANCE = 0.5  # m, truncation of the distance field
-MIN_SPREAD_M = 0.02  # m, floor of the odometry prediction's position spread
-MIN_SPREAD_RAD = math.radians(1.0)  # floor of its heading spread
+MIN_SPREAD_M = 0.01  # m, floor of the odometry prediction's position spread
+MIN_SPREAD_RAD = math.radians(0.5)  # floor of its heading spread
 
 
 @dataclass(frozen=True)

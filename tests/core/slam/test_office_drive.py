@@ -23,7 +23,8 @@ def test_trajectory_error_is_within_3_cm_and_1_degree(drive):
 
 
 def test_map_matches_the_world(drive):
-    # Strict IoU at 5 cm cells is about 0.67 here: a 1-2 cm pose error moves a thin wall face into the
-    # neighbouring cell (the 0.9 is not reached, see the README); within one cell it is about 0.83.
-    assert drive.iou >= 0.6
-    assert drive.iou_one_cell >= 0.8
+    # IoU over observed cells at 5 cm, after the ATE's SE(2) alignment: 0.80-0.93 over seeds 1-3 (seed 1, used
+    # here, is the worst). The 0.9 is not reached on every seed: a 1-2 cm drift across the 20 m drive
+    # moves a wall face into the neighbouring cell. Within one cell of tolerance it is above 0.9.
+    assert drive.iou >= 0.75
+    assert drive.iou_one_cell >= 0.9

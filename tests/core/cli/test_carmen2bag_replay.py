@@ -8,7 +8,7 @@ import pytest
 
 from mrs_nav.cli.main import main
 
-INTEL = Path(__file__).resolve().parents[3] / "shared" / "data" / "intel-corrected.log.gz"
+INTEL = Path(__file__).resolve().parents[4] / "shared" / "data" / "intel-corrected.log.gz"
 SCANS = 120
 
 

@@ -1,0 +1,136 @@
+"""The remote monitor against a real Zenoh peer on loopback (no ROS): discovery, definitions, decoding,
+latency, dashboard and snapshot."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import zenoh
+import zenoh.ext
+
+from mrs_nav.bridge.config import zenoh_settings
+from mrs_nav.bridge.dashboard import render, summarise
+from mrs_nav.bridge.decoder import noetic_store
+from mrs_nav.bridge.keys import topic_key, types_key
+from mrs_nav.bridge.monitor import RemoteMonitor
+from mrs_nav.bridge.session import open_session
+from mrs_nav.bridge.snapshot import draw_snapshot
+from mrs_nav.bridge.wire import encode_attachment, encode_definition, encoding_text
+from tests.rosharness import free_port, wait_for
+
+STORE = noetic_store()
+T = STORE.types
+
+
+def odometry(x: float, vx: float) -> Any:
+    header = T["std_msgs/msg/Header"](0, T["builtin_interfaces/msg/Time"](0, 0), "odom")
+    pose = T["geometry_msgs/msg/Pose"](
+        T["geometry_msgs/msg/Point"](x, 0.5, 0.0), T["geometry_msgs/msg/Quaternion"](0, 0, 0, 1)
+    )
+    zero = T["geometry_msgs/msg/Vector3"](0.0, 0.0, 0.0)
+    twist = T["geometry_msgs/msg/Twist"](T["geometry_msgs/msg/Vector3"](vx, 0.0, 0.0), zero)
+    cov = np.zeros(36)
+    return T["nav_msgs/msg/Odometry"](
+        header,
+        "base_footprint",
+        T["geometry_msgs/msg/PoseWithCovariance"](pose, cov),
+        T["geometry_msgs/msg/TwistWithCovariance"](twist, cov),
+    )
+
+
+def grid() -> Any:
+    header = T["std_msgs/msg/Header"](0, T["builtin_interfaces/msg/Time"](0, 0), "map")
+    origin = T["geometry_msgs/msg/Pose"](
+        T["geometry_msgs/msg/Point"](-1.0, -1.0, 0.0), T["geometry_msgs/msg/Quaternion"](0, 0, 0, 1)
+    )
+    info = T["nav_msgs/msg/MapMetaData"](T["builtin_interfaces/msg/Time"](0, 0), 0.5, 4, 3, origin)
+    return T["nav_msgs/msg/OccupancyGrid"](header, info, np.array([0, 100, -1, 0] * 3, dtype=np.int8))
+
+
+class FakeBridge:
+    """A Zenoh peer speaking the bridge's wire format (what zenoh_bridge does, minus ROS)."""
+
+    def __init__(self, endpoint: str) -> None:
+        self.session = open_session(zenoh_settings("peer", [endpoint], []))
+        self.entities: list[Any] = [self.session.declare_queryable("mrs_nav/@types/**", self.answer)]
+
+    def answer(self, query: zenoh.Query) -> None:
+        for name in ("nav_msgs/msg/Odometry", "nav_msgs/msg/OccupancyGrid"):
+            key = types_key("mrs_nav", name)
+            if zenoh.KeyExpr(key).intersects(query.key_expr):
+                text, md5 = STORE.generate_msgdef(name, ros_version=1)
+                query.reply(key, encode_definition(name, md5, text))
+
+    def publisher(self, topic: str, type_name: str, latched: bool) -> Any:
+        key = topic_key("mrs_nav", topic)
+        encoding = zenoh.Encoding(encoding_text(type_name))
+        self.entities.append(self.session.liveliness().declare_token(key))
+        if latched:
+            return zenoh.ext.declare_advanced_publisher(
+                self.session,
+                key,
+                encoding=encoding,
+                cache=zenoh.ext.CacheConfig(max_samples=1),
+                publisher_detection=True,
+            )
+        return self.session.declare_publisher(key, encoding=encoding)
+
+    def put(self, publisher: Any, msg: Any, type_name: str) -> None:
+        md5 = STORE.generate_msgdef(type_name, ros_version=1)[1]
+        payload = bytes(STORE.serialize_ros1(msg, type_name))
+        publisher.put(payload, attachment=encode_attachment(md5, time.time_ns()))
+
+
+@pytest.fixture
+def bridge() -> Iterator[tuple[FakeBridge, str]]:
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    fake = FakeBridge(endpoint)
+    yield fake, endpoint
+    fake.session.close()
+
+
+def test_monitor_discovers_decodes_and_gets_the_latched_map_late(
+    bridge: tuple[FakeBridge, str], tmp_path: Path
+) -> None:
+    fake, endpoint = bridge
+    map_pub = fake.publisher("/map", "nav_msgs/msg/OccupancyGrid", latched=True)
+    fake.put(map_pub, grid(), "nav_msgs/msg/OccupancyGrid")  # before the monitor exists: history must bring it
+    odom_pub = fake.publisher("/odom", "nav_msgs/msg/Odometry", latched=False)
+    with RemoteMonitor([endpoint]) as monitor:
+        wait_for(lambda: "/map" in monitor.topics() and monitor.topics()["/map"].count == 1, 10, "the latched map")
+        for i in range(20):
+            fake.put(odom_pub, odometry(0.1 * i, 0.2), "nav_msgs/msg/Odometry")
+            time.sleep(0.01)
+        wait_for(
+            lambda: monitor.topics().get("/odom") is not None and monitor.topics()["/odom"].count == 20, 5, "20 odom"
+        )
+        odom = monitor.latest("/odom")
+        assert odom.pose.pose.position.x == pytest.approx(1.9)
+        stats = monitor.topics()
+        assert stats["/odom"].type == "nav_msgs/Odometry"
+        assert 0 < stats["/odom"].latency_ms(50) < 50  # loopback: well under a frame time
+        summary = summarise({"/odom": odom, "/map": monitor.latest("/map")}, stats, time.monotonic())
+    assert summary["pose"]["x"] == pytest.approx(1.9)
+    assert summary["speed"]["linear"] == pytest.approx(0.2)
+    assert summary["map"] == {"width": 4, "height": 3, "resolution": 0.5, "size_m": [2.0, 1.5]}
+    odom_stats = stats["/odom"]
+    assert odom_stats.rate_hz(odom_stats.arrivals[-1]) > 20  # sent at ~100 Hz
+    assert odom_stats.rate_hz(odom_stats.arrivals[-1] + 10.0) == 0.0  # silent for long: shown as stopped
+    text = render(summary)
+    assert "4 x 3 cells" in text
+    assert "/odom" in text
+    png = draw_snapshot(tmp_path / "snap.png", grid(), odom)
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_send_goal_without_a_bridge_says_nobody_answered(bridge: tuple[FakeBridge, str]) -> None:
+    _, endpoint = bridge
+    with RemoteMonitor([endpoint], timeout=0.5) as monitor:
+        accepted, answer = monitor.send_goal(1.0, 2.0, 0.0)
+    assert not accepted
+    assert "no bridge" in answer
