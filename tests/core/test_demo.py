@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+import shutil
+import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -44,6 +46,14 @@ def test_the_robot_follows_its_plans_and_slam_tracks_it(arena_run) -> None:
     assert result.ate_rmse_m < 0.05
     shortest = 4.30  # around the cylinder (the planners issue's figure for this query)
     assert result.outcomes[0].travelled_m < 1.4 * shortest
+
+
+@pytest.mark.skipif(shutil.which("rosbag") is None, reason="Debian's rosbag is not installed")
+def test_debians_rosbag_reads_the_session_bag(arena_run) -> None:
+    _, _, bag = arena_run
+    check = subprocess.run(["rosbag", "check", str(bag)], capture_output=True, text=True, timeout=120, check=False)
+    assert check.returncode == 0, check.stderr
+    assert "Bag is ready" in check.stdout
 
 
 def test_the_bag_holds_the_topics_of_a_ros_recording(arena_run) -> None:
