@@ -88,6 +88,9 @@ def read_messages(path: Path, topics: Iterable[str], *, required: Iterable[str] 
             present = ", ".join(sorted(reader.topics)) or "none"
             raise BagError(f"bag {path} has no {', '.join(missing)} topic (topics: {present})")
         connections = [c for c in reader.connections if c.topic in wanted]
+        for conn in connections:
+            if conn.msgtype not in store.types:
+                raise BagError(f"bag {path}: topic {conn.topic} has type {conn.msgtype}, which mrs_nav cannot read")
         if not connections:  # rosbags reads every connection when given none
             return
         try:

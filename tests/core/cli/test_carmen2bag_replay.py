@@ -48,6 +48,7 @@ def test_carmen2bag_then_replay(excerpt, tmp_path, capsys):
         "rpe_trans_mean_m",
         "rpe_rot_mean_deg",
         "map_yaml",
+        "metrics",
     }
     assert summary["scans"] == SCANS
     assert summary["rpe_trans_mean_m"] < 0.07

@@ -1,0 +1,71 @@
+"""Re-running the planner on a session's recorded goals against a map (the replayed one, or the recorded one).
+
+Each goal is planned from the robot's pose when the goal was sent, and from that pose turned round (a
+differential drive turns in place; the navigator tries both too), keeping the shorter path, with RRT* (arc
+edges) on the map with its unknown cells counted as free (as the navigator's ``allow_unknown``) and obstacles
+grown by the robot's radius. The budget is a number of iterations, never wall-clock time, and each query uses a
+generator seeded with ``(seed, goal index, heading index)``: the same map and goals give the same plans on any
+machine.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from mrs_nav.geometry import Pose2D, wrap_angle
+from mrs_nav.occupancy_grid import BURGER_RADIUS, FREE, UNKNOWN, OccupancyGrid
+from mrs_nav.planning import PlanResult
+from mrs_nav.replay.recorded import Goal
+from mrs_nav.rrt_star import RRTStarConfig, rrt_star
+
+
+@dataclass(frozen=True)
+class GoalPlan:
+    """One re-planned goal: where from and to (m, rad), and the planner's result."""
+
+    start: Pose2D
+    goal: Goal
+    result: PlanResult
+
+
+def planning_grid(grid: OccupancyGrid, robot_radius: float = BURGER_RADIUS) -> OccupancyGrid:
+    """``grid`` with unknown cells made free, then obstacles grown by ``robot_radius`` (m)."""
+    values = grid.values.copy()
+    values[values == UNKNOWN] = FREE
+    return OccupancyGrid(values, grid.resolution, grid.origin).inflate(robot_radius)
+
+
+def replan_goals(
+    grid: OccupancyGrid,
+    goals: Sequence[Goal],
+    start_at: Callable[[float], Pose2D | None],
+    *,
+    iterations: int = 1500,
+    seed: int = 0,
+    first_path: bool = False,
+) -> list[GoalPlan]:
+    """Plan to every goal from ``start_at(goal stamp)`` (goals with no known start are skipped); ``seed`` >= 0.
+
+    With ``first_path`` each query stops at its first path to the goal (reachability at a fraction of the cost).
+    """
+    plan_grid = planning_grid(grid)
+    config = RRTStarConfig(iterations=iterations, time_budget=None, stop_at_first=first_path)
+    plans = []
+    for i, goal in enumerate(goals):
+        start = start_at(goal.stamp)
+        if start is None:
+            continue
+        target = np.array([goal.pose.x, goal.pose.y], dtype=np.float64)
+        best: GoalPlan | None = None
+        for k, heading in enumerate((start.yaw, wrap_angle(start.yaw + math.pi))):
+            from_pose = Pose2D(start.x, start.y, heading)
+            result = rrt_star(from_pose, target, plan_grid, config, np.random.default_rng([seed, i, k]))
+            if best is None or (result.success and (not best.result.success or result.length_m < best.result.length_m)):
+                best = GoalPlan(from_pose, goal, result)
+        assert best is not None
+        plans.append(best)
+    return plans
