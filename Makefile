@@ -11,6 +11,7 @@ install:
 
 demo: install
 	$(VENV)/bin/mrs-nav figures --out $(OUT)/figures
+	$(VENV)/bin/mrs-nav demo --out $(OUT)
 
 lint: install
 	$(VENV)/bin/ruff check src tests $(wildcard scripts/*)

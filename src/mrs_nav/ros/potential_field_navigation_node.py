@@ -1,0 +1,242 @@
+"""The ``potential_field_navigation`` node: the course's potential-field follower on the robot, around
+:class:`mrs_nav.potential_field_follower.FieldFollower`.
+
+Obstacles come from the world file (``~obstacles: world``) or from each ``scan`` (``~obstacles: scan``); the
+pose from ``ground_truth/odom`` (``~pose_source: ground_truth``) or tf ``~frame -> base_footprint``
+(``~pose_source: tf``); the goal from ``~goal_x``/``~goal_y`` or ``move_base_simple/goal``. Publishes
+``cmd_vel`` and ``~status`` (std_msgs/String, latched, ``"<state>: <message>"``) and appends the robot's
+trajectory to ``~trajectory_file`` (lines ``t x y yaw``, sim seconds, metres, radians), as the course's
+exercise wrote ``/tmp/gazebo_exercise.txt`` for plotting.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TextIO
+
+import numpy as np
+import rospy
+import tf2_ros
+from geometry_msgs.msg import PoseStamped, Twist
+from nav_msgs.msg import Odometry
+from sensor_msgs.msg import LaserScan
+from std_msgs.msg import String
+
+from mrs_nav.errors import InvalidInputError, MrsNavError
+from mrs_nav.geometry import Pose2D
+from mrs_nav.obstacles import Obstacles
+from mrs_nav.potential_field_follower import FieldFollower, FieldFollowerConfig, scan_obstacles
+from mrs_nav.ros.conversions import (
+    laser_scan_arrays,
+    pose_from_odometry,
+    pose_from_transform,
+    valid_ranges,
+)
+from mrs_nav.ros.navigation_conversions import latest_pose, pose_in_frame
+from mrs_nav.world import load_world
+
+OBSTACLE_SOURCES = ("world", "scan")
+POSE_SOURCES = ("ground_truth", "tf")
+
+
+@dataclass(frozen=True)
+class PotentialFieldNavigationConfig:
+    """The node's private parameters (defaults as in config/potential_field_navigation.yaml)."""
+
+    obstacles: str = "world"
+    world: Path | None = None
+    pose_source: str = "ground_truth"
+    frame: str = "odom"
+    base_frame: str = "base_footprint"
+    goal: tuple[float, float] | None = None
+    rate_hz: float = 10.0
+    pose_timeout_s: float = 1.0
+    trajectory_file: Path | None = Path("/tmp/potential_field_trajectory.txt")
+    seed: int | None = None
+    follower: FieldFollowerConfig = field(default_factory=FieldFollowerConfig)
+
+    def __post_init__(self) -> None:
+        if self.obstacles not in OBSTACLE_SOURCES:
+            raise InvalidInputError(f"~obstacles: expected one of {OBSTACLE_SOURCES}, got {self.obstacles!r}")
+        if self.pose_source not in POSE_SOURCES:
+            raise InvalidInputError(f"~pose_source: expected one of {POSE_SOURCES}, got {self.pose_source!r}")
+        if self.obstacles == "world" and self.world is None:
+            raise InvalidInputError("~world: a world file is required when ~obstacles is 'world'")
+        for name in ("rate_hz", "pose_timeout_s"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise InvalidInputError(f"~{name}: must be a positive number, got {value}")
+
+    @classmethod
+    def from_params(cls) -> PotentialFieldNavigationConfig:
+        def get(name: str, default: Any) -> Any:
+            return rospy.get_param(f"~{name}", default)
+
+        gx, gy = float(get("goal_x", math.nan)), float(get("goal_y", math.nan))
+        world, trajectory = str(get("world", "")), str(get("trajectory_file", "/tmp/potential_field_trajectory.txt"))
+        seed = int(get("seed", -1))
+        follower = FieldFollowerConfig(
+            epsilon=float(get("epsilon", 0.2)),
+            speed=float(get("speed", 0.2)),
+            robot_radius=float(get("robot_radius", 0.105)),
+            safety_margin=float(get("safety_margin", 0.05)),
+            goal_tolerance=float(get("goal_tolerance", 0.1)),
+            max_linear=float(get("max_linear", 0.22)),
+            max_angular=float(get("max_angular", 2.84)),
+        )
+        return cls(
+            obstacles=str(get("obstacles", "world")),
+            world=Path(world) if world else None,
+            pose_source=str(get("pose_source", "ground_truth")),
+            frame=str(get("frame", "odom")),
+            base_frame=str(get("base_frame", "base_footprint")),
+            goal=(gx, gy) if math.isfinite(gx) and math.isfinite(gy) else None,
+            rate_hz=float(get("rate", 10.0)),
+            pose_timeout_s=float(get("pose_timeout", 1.0)),
+            trajectory_file=Path(trajectory) if trajectory else None,
+            seed=None if seed < 0 else seed,
+            follower=follower,
+        )
+
+
+class PotentialFieldNavigationNode:
+    """Wires a :class:`FieldFollower` to ROS; :meth:`start` begins the control timer."""
+
+    def __init__(self, config: PotentialFieldNavigationConfig) -> None:
+        self.config = config
+        self._rng = np.random.default_rng(config.seed)
+        self._world_obstacles = (
+            Obstacles.from_world(load_world(config.world)) if config.obstacles == "world" and config.world else None
+        )
+        self._lock = threading.Lock()
+        self._follower: FieldFollower | None = None
+        self._scan_obstacles: Obstacles | None = None
+        self._truth: tuple[rospy.Time, Pose2D] | None = None
+        self._trajectory: TextIO | None = None
+        self._tf_buffer = tf2_ros.Buffer()
+        self._tf_listener = tf2_ros.TransformListener(self._tf_buffer)
+        self._cmd_pub = rospy.Publisher("cmd_vel", Twist, queue_size=1)
+        self._status_pub = rospy.Publisher("~status", String, queue_size=10, latch=True)
+        self._goal_sub = rospy.Subscriber("move_base_simple/goal", PoseStamped, self._on_goal, queue_size=1)
+        self._truth_sub = (
+            rospy.Subscriber("ground_truth/odom", Odometry, self._on_truth, queue_size=1)
+            if config.pose_source == "ground_truth"
+            else None
+        )
+        self._scan_sub = (
+            rospy.Subscriber("scan", LaserScan, self._on_scan, queue_size=1) if config.obstacles == "scan" else None
+        )
+        self._timer: rospy.Timer | None = None
+
+    def start(self) -> None:
+        """Open the trajectory file, take the goal parameter if set, and start the control loop."""
+        if self.config.trajectory_file is not None:
+            self._trajectory = self.config.trajectory_file.open("w", encoding="utf-8")
+            self._trajectory.write("# t x y yaw (sim s, m, m, rad): potential_field_navigation trajectory\n")
+        rospy.on_shutdown(self._stop)
+        self._status("idle", "waiting for a goal")
+        if self.config.goal is not None:
+            self._set_goal(*self.config.goal)
+        self._timer = rospy.Timer(rospy.Duration(1.0 / self.config.rate_hz), self._on_timer)
+
+    # -- inputs -------------------------------------------------------------------------------------------------
+
+    def _on_truth(self, msg: Odometry) -> None:
+        try:
+            pose = pose_from_odometry(msg)
+        except MrsNavError as err:
+            rospy.logwarn_throttle(5.0, f"potential_field_navigation: ignoring ground truth: {err}")
+            return
+        with self._lock:
+            self._truth = (msg.header.stamp, pose)
+
+    def _on_goal(self, msg: PoseStamped) -> None:
+        try:
+            goal = pose_in_frame(self._tf_buffer, msg, self.config.frame)
+        except (MrsNavError, tf2_ros.TransformException) as err:
+            rospy.logwarn(f"potential_field_navigation: goal refused: {err}")
+            self._status("refused", f"goal refused: {err}")
+            return
+        self._set_goal(goal.x, goal.y)
+
+    def _set_goal(self, x: float, y: float) -> None:
+        obstacles = self._world_obstacles
+        if obstacles is not None and obstacles.inflated(self.config.follower.robot_radius).contains([[x, y]])[0]:
+            rospy.logwarn(f"potential_field_navigation: goal ({x:.2f}, {y:.2f}) refused: inside an obstacle")
+            self._status("refused", f"goal ({x:.2f}, {y:.2f}) refused: inside an obstacle")
+            return
+        with self._lock:
+            current = obstacles or self._scan_obstacles or Obstacles()
+            self._follower = FieldFollower((x, y), current, self.config.follower, self._rng)
+        rospy.loginfo(f"potential_field_navigation: goal ({x:.2f}, {y:.2f}) accepted")
+        self._status("active", f"goal ({x:.2f}, {y:.2f}) accepted")
+
+    def _on_scan(self, msg: LaserScan) -> None:
+        pose = self._pose()
+        if pose is None:
+            return
+        try:
+            mount = self._tf_buffer.lookup_transform(self.config.base_frame, msg.header.frame_id, rospy.Time(0))
+            laser = pose.compose(pose_from_transform(mount))
+        except (tf2_ros.TransformException, MrsNavError):
+            laser = pose
+        angles, ranges = laser_scan_arrays(msg)
+        ranges = np.where(valid_ranges(msg, ranges), ranges, np.inf)
+        obstacles = scan_obstacles(laser, angles, ranges)
+        with self._lock:
+            self._scan_obstacles = obstacles
+            if self._follower is not None:
+                self._follower.set_obstacles(obstacles)
+
+    def _pose(self) -> Pose2D | None:
+        now = rospy.Time.now()
+        if self.config.pose_source == "ground_truth":
+            with self._lock:
+                truth = self._truth
+            if truth is None or (now - truth[0]).to_sec() > self.config.pose_timeout_s:
+                return None
+            return truth[1]
+        cfg = self.config
+        return latest_pose(self._tf_buffer, cfg.frame, cfg.base_frame, cfg.pose_timeout_s, "potential_field_navigation")
+
+    # -- control ------------------------------------------------------------------------------------------------
+
+    def _on_timer(self, event: rospy.timer.TimerEvent) -> None:
+        now = rospy.Time.now().to_sec()
+        pose = self._pose()
+        if pose is not None and self._trajectory is not None:
+            self._trajectory.write(f"{now:.3f} {pose.x:.4f} {pose.y:.4f} {pose.yaw:.4f}\n")
+        with self._lock:
+            follower = self._follower
+            if follower is None:
+                return
+            if pose is None:
+                self._cmd_pub.publish(Twist())
+                rospy.logwarn_throttle(5.0, "potential_field_navigation: no pose; stopped")
+                return
+            command = follower.command(pose, now)
+            if command.done:
+                self._follower = None
+        twist = Twist()
+        twist.linear.x, twist.angular.z = command.u, command.omega
+        self._cmd_pub.publish(twist)
+        if command.done:
+            gx, gy = follower.goal
+            message = f"goal ({gx:.2f}, {gy:.2f}) reached, {math.hypot(gx - pose.x, gy - pose.y):.3f} m away"
+            rospy.loginfo(f"potential_field_navigation: {message}")
+            self._status("reached", message)
+            if self._trajectory is not None:
+                self._trajectory.flush()
+
+    def _status(self, state: str, message: str) -> None:
+        self._status_pub.publish(String(data=f"{state}: {message}"))
+
+    def _stop(self) -> None:
+        if self._timer is not None:
+            self._timer.shutdown()
+        self._cmd_pub.publish(Twist())
+        if self._trajectory is not None:
+            self._trajectory.close()

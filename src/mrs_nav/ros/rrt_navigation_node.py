@@ -1,0 +1,206 @@
+"""The ``rrt_navigation`` node: RRT* to an rviz 2D Nav Goal on the live SLAM map, followed by feedback
+linearisation (the course's ``rrt_navigation.py``), around :class:`mrs_nav.navigator.Navigator`.
+
+Subscribes ``map`` (nav_msgs/OccupancyGrid) and ``move_base_simple/goal`` (geometry_msgs/PoseStamped, any frame
+tf can bring into the map frame); reads the robot pose from tf ``map -> base_footprint``; publishes ``path``
+(nav_msgs/Path, frame map, latched), ``cmd_vel`` (geometry_msgs/Twist) and ``~status`` (std_msgs/String,
+latched, one message per event: ``"<state>: <message>"`` with state one of idle, active, preempted, reached,
+failed, refused). Every event is also logged (warnings for refusals and failures).
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from dataclasses import dataclass, field
+from typing import Any
+
+import rospy
+import tf2_ros
+from geometry_msgs.msg import PoseStamped, Twist
+from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
+from nav_msgs.msg import Path
+from std_msgs.msg import String
+
+from mrs_nav.errors import InvalidInputError, MrsNavError
+from mrs_nav.geometry import Pose2D
+from mrs_nav.navigator import PLANNERS, EventKind, GoalState, NavEvent, Navigator, NavigatorConfig, rrt_planner
+from mrs_nav.path_following import FollowerConfig
+from mrs_nav.ros.navigation_conversions import grid_from_msg, latest_pose, path_msg, pose_in_frame
+
+# The status word published with each event (the navigator's goal state after it).
+STATUS_OF_EVENT = {
+    EventKind.ACCEPTED: "active",
+    EventKind.PLANNED: "active",
+    EventKind.PLAN_FAILED: "active",
+    EventKind.HOLDING: "active",
+    EventKind.RESUMED: "active",
+    EventKind.PREEMPTED: "preempted",
+    EventKind.CANCELLED: "preempted",
+    EventKind.REFUSED: "refused",
+    EventKind.REACHED: "reached",
+    EventKind.FAILED: "failed",
+}
+
+
+@dataclass(frozen=True)
+class RrtNavigationConfig:
+    """The node's private parameters (defaults as in config/rrt_navigation.yaml)."""
+
+    planner: str = "rrt_star"
+    time_budget_s: float = 0.3
+    rate_hz: float = 10.0
+    pose_timeout_s: float = 1.0
+    correction_timeout_s: float = 5.0
+    map_frame: str = "map"
+    odom_frame: str = "odom"
+    base_frame: str = "base_footprint"
+    seed: int | None = None
+    navigator: NavigatorConfig = field(default_factory=NavigatorConfig)
+
+    def __post_init__(self) -> None:
+        if self.planner not in PLANNERS:
+            raise InvalidInputError(f"~planner: expected one of {', '.join(PLANNERS)}, got {self.planner!r}")
+        for name in ("time_budget_s", "rate_hz", "pose_timeout_s", "correction_timeout_s"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise InvalidInputError(f"~{name}: must be a positive number, got {value}")
+
+    @classmethod
+    def from_params(cls) -> RrtNavigationConfig:
+        def get(name: str, default: Any) -> Any:
+            return rospy.get_param(f"~{name}", default)
+
+        follower = FollowerConfig(
+            speed=float(get("speed", 0.2)),
+            epsilon=float(get("epsilon", 0.1)),
+            gain=float(get("gain", 2.0)),
+            max_linear=float(get("max_linear", 0.22)),
+            max_angular=float(get("max_angular", 2.84)),
+        )
+        navigator = NavigatorConfig(
+            robot_radius=float(get("robot_radius", 0.105)),
+            safety_margin_m=float(get("safety_margin", 0.1)),
+            goal_tolerance_m=float(get("goal_tolerance", 0.2)),
+            allow_unknown=bool(get("allow_unknown", True)),
+            stray_distance_m=float(get("stray_distance", 0.3)),
+            replan_period_s=float(get("replan_period", 5.0)),
+            improvement_ratio=float(get("improvement_ratio", 0.85)),
+            max_failed_plans=int(get("max_failed_plans", 5)),
+            retry_delay_s=float(get("retry_delay", 1.0)),
+            progress_timeout_s=float(get("progress_timeout", 30.0)),
+            map_timeout_s=float(get("map_timeout", 0.0)),
+            follower=follower,
+        )
+        seed = get("seed", -1)
+        return cls(
+            planner=str(get("planner", "rrt_star")),
+            time_budget_s=float(get("time_budget", 0.3)),
+            rate_hz=float(get("rate", 10.0)),
+            pose_timeout_s=float(get("pose_timeout", 1.0)),
+            correction_timeout_s=float(get("correction_timeout", 5.0)),
+            map_frame=str(get("map_frame", "map")),
+            odom_frame=str(get("odom_frame", "odom")),
+            base_frame=str(get("base_frame", "base_footprint")),
+            seed=None if int(seed) < 0 else int(seed),
+            navigator=navigator,
+        )
+
+
+class RrtNavigationNode:
+    """Wires a :class:`Navigator` to ROS; :meth:`start` begins the control timer."""
+
+    def __init__(self, config: RrtNavigationConfig) -> None:
+        self.config = config
+        planner = rrt_planner(config.planner, config.time_budget_s)
+        self.navigator = Navigator(planner, config.navigator, seed=config.seed)
+        self._lock = threading.Lock()
+        self._tf_buffer = tf2_ros.Buffer()
+        self._tf_listener = tf2_ros.TransformListener(self._tf_buffer)
+        self._cmd_pub = rospy.Publisher("cmd_vel", Twist, queue_size=1)
+        self._path_pub = rospy.Publisher("path", Path, queue_size=1, latch=True)
+        self._status_pub = rospy.Publisher("~status", String, queue_size=10, latch=True)
+        self._map_sub = rospy.Subscriber("map", OccupancyGridMsg, self._on_map, queue_size=1)
+        self._goal_sub = rospy.Subscriber("move_base_simple/goal", PoseStamped, self._on_goal, queue_size=1)
+        self._timer: rospy.Timer | None = None
+        self._last_time = rospy.Time(0)
+
+    def start(self) -> None:
+        """Publish the idle status, start the control loop and stop the robot on shutdown."""
+        self._status_pub.publish(String(data="idle: waiting for a goal"))
+        rospy.on_shutdown(self._stop)
+        self._timer = rospy.Timer(rospy.Duration(1.0 / self.config.rate_hz), self._on_timer)
+
+    # -- inputs ---------------------------------------------------------------------------------------------
+
+    def _on_map(self, msg: OccupancyGridMsg) -> None:
+        try:
+            grid = grid_from_msg(msg)
+        except MrsNavError as err:
+            rospy.logwarn_throttle(5.0, f"rrt_navigation: ignoring map: {err}")
+            return
+        if msg.header.frame_id and msg.header.frame_id.lstrip("/") != self.config.map_frame:
+            rospy.logwarn_throttle(
+                5.0,
+                f"rrt_navigation: ignoring map in frame {msg.header.frame_id!r}, expected {self.config.map_frame!r}",
+            )
+            return
+        with self._lock:
+            self.navigator.set_map(grid, rospy.get_time())
+
+    def _on_goal(self, msg: PoseStamped) -> None:
+        try:
+            goal = pose_in_frame(self._tf_buffer, msg, self.config.map_frame)
+        except (MrsNavError, tf2_ros.TransformException) as err:
+            self._report([NavEvent(EventKind.REFUSED, f"goal refused: {err}")])
+            return
+        with self._lock:
+            events = self.navigator.set_goal(goal.x, goal.y, rospy.get_time())
+        self._report(events)
+
+    def _pose(self) -> Pose2D | None:
+        """The robot pose in the map frame: the latest ``map -> odom`` correction (SLAM publishes it at its own
+        pace; no older than ``correction_timeout``) composed with the latest odometry ``odom -> base`` (no older
+        than ``pose_timeout``); None when either is missing or too old."""
+        cfg, who = self.config, "rrt_navigation"
+        odom = latest_pose(self._tf_buffer, cfg.odom_frame, cfg.base_frame, cfg.pose_timeout_s, who)
+        if odom is None:
+            return None
+        correction = latest_pose(self._tf_buffer, cfg.map_frame, cfg.odom_frame, cfg.correction_timeout_s, who)
+        return None if correction is None else correction.compose(odom)
+
+    # -- control ----------------------------------------------------------------------------------------------
+
+    def _on_timer(self, event: rospy.timer.TimerEvent) -> None:
+        now = rospy.Time.now()
+        if now < self._last_time:  # sim time jumped back (a bag restarted): forget the goal
+            rospy.logwarn("rrt_navigation: time jumped backwards; dropping the goal")
+            with self._lock:
+                self._report(self.navigator.cancel())
+            self._tf_buffer.clear()
+        self._last_time = now
+        pose = self._pose()
+        with self._lock:
+            if pose is not None and self.navigator.replan_reason(pose, now.to_sec()) is not None:
+                # planning takes wall-clock time while the simulation may run on at many times real time
+                self._cmd_pub.publish(Twist())
+            command = self.navigator.update(pose, now.to_sec())
+            state = self.navigator.state
+        twist = Twist()
+        twist.linear.x, twist.angular.z = command.u, command.omega
+        if state is GoalState.ACTIVE or command.events:
+            self._cmd_pub.publish(twist)
+        if command.path is not None:
+            self._path_pub.publish(path_msg(command.path, now, self.config.map_frame))
+        self._report(command.events)
+
+    def _report(self, events: list[NavEvent] | tuple[NavEvent, ...]) -> None:
+        """Log each event and publish it on ``~status``."""
+        for e in events:
+            (rospy.logwarn if e.kind.warning else rospy.loginfo)(f"rrt_navigation: {e.message}")
+            self._status_pub.publish(String(data=f"{STATUS_OF_EVENT[e.kind]}: {e.message}"))
+
+    def _stop(self) -> None:
+        if self._timer is not None:
+            self._timer.shutdown()
+        self._cmd_pub.publish(Twist())

@@ -1,0 +1,53 @@
+"""The potential-field follower under a real roslaunch with the simulator (sim time, faster than real time)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from tests.ros.navharness import FOOTPRINT_RADIUS, StatusLog, TruthTrack, trajectory_lines
+from tests.rosharness import RosMaster, wait_for
+
+pytestmark = pytest.mark.ros
+
+# The simulator paced at 10x real time: the node's 10 Hz control loop must see the robot move between its
+# ticks as it would live (at "as fast as possible" the simulation outruns any controller on this machine).
+RTF = "10"
+SIM_TIME_BOUND = 90.0  # s, the core tests take 30-55 s
+
+
+@pytest.mark.parametrize("obstacles", ["world", "scan"])
+def test_the_course_arena_goal_is_reached_without_contact(
+    obstacles: str, ros_master: RosMaster, rospy_node: Any, tmp_path: Path
+) -> None:
+    rospy = rospy_node
+    truth = TruthTrack(rospy, "simple.world")
+    status = StatusLog(rospy, "/potential_field_navigation/status")
+    trajectory = tmp_path / "trajectory.txt"
+    try:
+        with ros_master.launch(
+            "potential_field_navigation.launch",
+            f"real_time_factor:={RTF}",
+            "goal_x:=1.5",
+            "goal_y:=1.5",
+            "seed:=1",
+            f"obstacles:={obstacles}",
+            f"trajectory_file:={trajectory}",
+        ) as proc:
+            wait_for(lambda: proc.poll() is not None or status.has("reached"), 120.0, "the goal to be reached")
+            assert proc.poll() is None, "roslaunch exited"
+            reached_at = rospy.get_time()
+        _, x, y = truth.last()
+        assert math.hypot(x - 1.5, y - 1.5) <= 0.2
+        assert reached_at < SIM_TIME_BOUND
+        assert truth.min_clearance() > FOOTPRINT_RADIUS
+        assert truth.contacts == 0
+        rows = trajectory_lines(trajectory)
+        assert len(rows) > 100
+        assert math.hypot(rows[0][1] + 1.5, rows[0][2] + 1.5) < 0.05
+    finally:
+        truth.close()
+        status.close()
