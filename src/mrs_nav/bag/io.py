@@ -29,13 +29,17 @@ def typestore() -> Any:
 
 
 class BagWriter:
-    """Write messages to a new ROS 1 bag (LZ4-compressed chunks unless ``compress=False``)."""
+    """Write messages to a new ROS 1 bag (BZ2-compressed chunks unless ``compress=False``).
+
+    BZ2, not LZ4: Debian's rosbag cannot decompress the LZ4 chunks rosbags writes ("malformed data to
+    decompress"), and every bag mrs_nav writes must open in the user's own rosbag tools.
+    """
 
     def __init__(self, path: Path, *, compress: bool = True) -> None:
         self.path = path
         self._writer = Writer(path)
         if compress:
-            self._writer.set_compression(Writer.CompressionFormat.LZ4)  # must precede open()
+            self._writer.set_compression(Writer.CompressionFormat.BZ2)  # must precede open()
         self._connections: dict[str, Any] = {}
 
     def __enter__(self) -> BagWriter:

@@ -35,6 +35,19 @@ def test_scan_and_odometry_round_trip(tmp_path):
     assert (pose.x, pose.y, pose.yaw) == pytest.approx((1, 2, 3))
 
 
+@pytest.mark.ros
+def test_debian_rosbag_reads_every_message_we_write(tmp_path):
+    rosbag = pytest.importorskip("rosbag")  # Debian's python3-rosbag, which users open our bags with
+    bag = tmp_path / "ours.bag"
+    with BagWriter(bag) as writer:
+        for i in range(50):
+            pose = Pose2D(0.01 * i, 0.0, 0.0)
+            writer.write("/odom", ODOMETRY, 10**9 + i * 10**7, odometry_message(pose, 1.0 + 0.01 * i, "odom", "base"))
+    with rosbag.Bag(str(bag)) as theirs:
+        xs = [msg.pose.pose.position.x for _, msg, _ in theirs.read_messages(topics=["/odom"])]
+    assert xs == pytest.approx([0.01 * i for i in range(50)])
+
+
 def test_missing_topic_names_bag_and_topic(tmp_path):
     bag = tmp_path / "b.bag"
     with BagWriter(bag) as writer:
