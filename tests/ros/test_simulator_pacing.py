@@ -33,6 +33,45 @@ def test_real_time_factor_paces_sim_time_against_the_wall_clock(ros_master: RosM
     assert (sim1 - sim0) / (wall1 - wall0) == pytest.approx(2.0, rel=0.1)
 
 
+def test_lockstep_holds_the_sim_within_one_period_of_the_last_command_and_runs_free_without_one(
+    ros_master: RosMaster, rospy_node: Any
+) -> None:
+    rospy = rospy_node
+    from geometry_msgs.msg import Twist
+    from rosgraph_msgs.msg import Clock
+
+    samples: list[float] = []  # sim time of each /clock message of this launch
+    sub = rospy.Subscriber("/clock", Clock, lambda m: samples.append(m.clock.to_sec()), tcp_nodelay=True)
+    cmd = rospy.Publisher("/cmd_vel", Twist, queue_size=1)
+    try:
+        launch_args = ("real_time_factor:=0", "lockstep:=true")
+        with ros_master.launch("simulation.launch", *launch_args, name="lockstep") as proc:
+            wait_for(lambda: proc.poll() is not None or len(samples) > 10, 60.0, "/clock in lockstep")
+            wait_for(lambda: cmd.get_num_connections() > 0, 20.0, "the simulator to subscribe /cmd_vel")
+            # no controller yet: flat out
+            free0 = samples[-1]
+            time.sleep(1.0)
+            assert samples[-1] - free0 > 3.0, "without a controller the simulation should run freely"
+            # one command: the simulation stops one period (0.1 s) after it, for as long as no other comes
+            cmd.publish(Twist())
+            time.sleep(0.25)
+            held = samples[-1]
+            time.sleep(0.3)  # still well inside the 1 s wall-clock silence timeout
+            assert samples[-1] == held
+            # the next command releases exactly one more period
+            cmd.publish(Twist())
+            wait_for(lambda: samples[-1] > held, 5.0, "the next command to release the simulation")
+            time.sleep(0.2)
+            assert samples[-1] == pytest.approx(held + 0.1, abs=1e-6)
+            # the controller falls silent: after the 1 s wall timeout the simulation runs freely again
+            released = samples[-1]
+            time.sleep(2.0)
+            assert samples[-1] - released > 3.0
+    finally:
+        sub.unregister()
+        cmd.unregister()
+
+
 def test_a_bad_world_ends_the_launch_with_one_clear_line(ros_master: RosMaster, tmp_path: Path) -> None:
     bad = tmp_path / "ball.world"
     bad.write_text(

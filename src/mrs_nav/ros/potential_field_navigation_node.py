@@ -6,7 +6,8 @@ pose from ``ground_truth/odom`` (``~pose_source: ground_truth``) or tf ``~frame 
 (``~pose_source: tf``); the goal from ``~goal_x``/``~goal_y`` or ``move_base_simple/goal``. Publishes
 ``cmd_vel`` and ``~status`` (std_msgs/String, latched, ``"<state>: <message>"``) and appends the robot's
 trajectory to ``~trajectory_file`` (lines ``t x y yaw``, sim seconds, metres, radians), as the course's
-exercise wrote ``/tmp/gazebo_exercise.txt`` for plotting.
+exercise wrote ``/tmp/gazebo_exercise.txt`` for plotting. With ``~heartbeat`` (default true) ``cmd_vel`` goes
+out every control period even while idle (a zero Twist), which is what paces a simulator in lockstep.
 """
 
 from __future__ import annotations
@@ -56,6 +57,7 @@ class PotentialFieldNavigationConfig:
     pose_timeout_s: float = 1.0
     trajectory_file: Path | None = Path("/tmp/potential_field_trajectory.txt")
     seed: int | None = None
+    heartbeat: bool = True
     follower: FieldFollowerConfig = field(default_factory=FieldFollowerConfig)
 
     def __post_init__(self) -> None:
@@ -98,6 +100,7 @@ class PotentialFieldNavigationConfig:
             pose_timeout_s=float(get("pose_timeout", 1.0)),
             trajectory_file=Path(trajectory) if trajectory else None,
             seed=None if seed < 0 else seed,
+            heartbeat=bool(get("heartbeat", True)),
             follower=follower,
         )
 
@@ -212,6 +215,8 @@ class PotentialFieldNavigationNode:
         with self._lock:
             follower = self._follower
             if follower is None:
+                if self.config.heartbeat:  # a zero Twist every tick while idle paces a lockstep simulator
+                    self._cmd_pub.publish(Twist())
                 return
             if pose is None:
                 self._cmd_pub.publish(Twist())

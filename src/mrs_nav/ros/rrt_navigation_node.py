@@ -5,7 +5,9 @@ Subscribes ``map`` (nav_msgs/OccupancyGrid) and ``move_base_simple/goal`` (geome
 tf can bring into the map frame); reads the robot pose from tf ``map -> base_footprint``; publishes ``path``
 (nav_msgs/Path, frame map, latched), ``cmd_vel`` (geometry_msgs/Twist) and ``~status`` (std_msgs/String,
 latched, one message per event: ``"<state>: <message>"`` with state one of idle, active, preempted, reached,
-failed, refused). Every event is also logged (warnings for refusals and failures).
+failed, refused). Every event is also logged (warnings for refusals and failures). With ``~heartbeat`` (default
+true) ``cmd_vel`` goes out every control period even while idle (a zero Twist), which is what paces a simulator
+in lockstep; false leaves ``cmd_vel`` silent while idle (e.g. for teleoperation).
 """
 
 from __future__ import annotations
@@ -56,6 +58,7 @@ class RrtNavigationConfig:
     odom_frame: str = "odom"
     base_frame: str = "base_footprint"
     seed: int | None = None
+    heartbeat: bool = True
     navigator: NavigatorConfig = field(default_factory=NavigatorConfig)
 
     def __post_init__(self) -> None:
@@ -103,6 +106,7 @@ class RrtNavigationConfig:
             odom_frame=str(get("odom_frame", "odom")),
             base_frame=str(get("base_frame", "base_footprint")),
             seed=None if int(seed) < 0 else int(seed),
+            heartbeat=bool(get("heartbeat", True)),
             navigator=navigator,
         )
 
@@ -188,7 +192,8 @@ class RrtNavigationNode:
             state = self.navigator.state
         twist = Twist()
         twist.linear.x, twist.angular.z = command.u, command.omega
-        if state is GoalState.ACTIVE or command.events:
+        # the heartbeat (a zero Twist every tick while idle) paces a lockstep simulator at any sim rate
+        if self.config.heartbeat or state is GoalState.ACTIVE or command.events:
             self._cmd_pub.publish(twist)
         if command.path is not None:
             self._path_pub.publish(path_msg(command.path, now, self.config.map_frame))

@@ -10,7 +10,10 @@ publishes the static base_footprint -> base_link -> base_scan from ``urdf/burger
 The node steps the simulator in its own loop at the fixed physics rate, paced against the wall clock by
 ``~real_time_factor`` (1 = real time, 2 = twice as fast, 0 = as fast as the machine allows). ``/clock`` goes
 out every ``physics_rate / clock_rate`` steps, so sim-time timers in other nodes keep their resolution at any
-speed. A bad ``cmd_vel`` (non-finite numbers) is logged and ignored; the watchdog then stops the robot.
+speed. With ``~lockstep`` true the loop never runs more than ``~lockstep_period`` of sim time past the last
+``cmd_vel`` it received, so a controller ticking on sim time keeps up at any rate (see
+:mod:`mrs_nav.sim.lockstep`: free running before the first command and after ``~lockstep_timeout`` wall seconds
+of silence). A bad ``cmd_vel`` (non-finite numbers) is logged and ignored; the watchdog then stops the robot.
 """
 
 from __future__ import annotations
@@ -44,7 +47,7 @@ from mrs_nav.ros.conversions import (
     transform_stamped,
     twist_from_msg,
 )
-from mrs_nav.sim import LaserParams, Simulator, SimulatorConfig, Twist2D
+from mrs_nav.sim import LaserParams, LockstepConfig, LockstepGate, Simulator, SimulatorConfig, Twist2D
 from mrs_nav.sim.laser import Scan
 from mrs_nav.world import load_world
 
@@ -79,6 +82,7 @@ class SimulatorNodeConfig:
     scan_frame: str = "base_scan"
     ground_truth_frame: str = "world"
     publish_tf: bool = True
+    lockstep: LockstepConfig | None = None
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.real_time_factor) and self.real_time_factor >= 0.0):
@@ -124,6 +128,11 @@ class SimulatorNodeConfig:
             scan_frame=str(get("scan_frame", "base_scan")),
             ground_truth_frame=str(get("ground_truth_frame", "world")),
             publish_tf=bool(get("publish_tf", True)),
+            lockstep=LockstepConfig(
+                period=float(get("lockstep_period", 0.1)), timeout=float(get("lockstep_timeout", 1.0))
+            )
+            if bool(get("lockstep", False))
+            else None,
         )
 
 
@@ -175,6 +184,7 @@ class SimulatorNode:
         self._tf = tf2_ros.TransformBroadcaster() if config.publish_tf else None
         self._cmd_sub = rospy.Subscriber("cmd_vel", Twist, self._on_cmd_vel, queue_size=10)
         self._set_own_time = _own_the_clock()
+        self._gate = LockstepGate(config.lockstep) if config.lockstep is not None else None
 
     def _on_cmd_vel(self, msg: Twist) -> None:
         try:
@@ -184,6 +194,9 @@ class SimulatorNode:
             return
         with self._lock:
             self.sim.set_command(twist.v, twist.omega)
+            now = self.sim.time
+        if self._gate is not None:
+            self._gate.on_command(now)
 
     def _publish_state(self) -> None:
         cfg = self.config
@@ -233,11 +246,18 @@ class SimulatorNode:
             self._publish_scan(scan)
 
     def spin(self) -> None:
-        """Step until shutdown, paced by ``real_time_factor`` against the wall clock."""
-        rtf = self.config.real_time_factor
+        """Step until shutdown, paced by ``real_time_factor`` against the wall clock and, in lockstep, held
+        within one control period of the last command."""
+        rtf, gate = self.config.real_time_factor, self._gate
         self._clock_pub.publish(clock_msg(self.sim.time))
         wall_start, sim_start = time.monotonic(), self.sim.time
         while not rospy.is_shutdown():
+            if gate is not None and not gate.may_step(self.sim.time):
+                # bounded wait so shutdown is noticed; the wall clock stands still for pacing meanwhile
+                waited_from = time.monotonic()
+                gate.wait_for_command(self.sim.time, 0.1)
+                wall_start += time.monotonic() - waited_from
+                continue
             self.step()
             if rtf > 0.0:
                 ahead = (self.sim.time - sim_start) / rtf - (time.monotonic() - wall_start)

@@ -2,6 +2,7 @@
 
 from mrs_nav.sim.commands import CommandLimiter, Twist2D
 from mrs_nav.sim.laser import LaserParams, Scan
+from mrs_nav.sim.lockstep import LockstepConfig, LockstepGate
 from mrs_nav.sim.odometry import Odometry
 from mrs_nav.sim.robot import BurgerParams
 from mrs_nav.sim.simulator import ContactStats, Simulator, SimulatorConfig
@@ -11,6 +12,8 @@ __all__ = [
     "CommandLimiter",
     "ContactStats",
     "LaserParams",
+    "LockstepConfig",
+    "LockstepGate",
     "Odometry",
     "Scan",
     "Simulator",
