@@ -121,7 +121,7 @@ class PotentialFieldNavigationNode:
         self._trajectory: TextIO | None = None
         self._tf_buffer = tf2_ros.Buffer()
         self._tf_listener = tf2_ros.TransformListener(self._tf_buffer)
-        self._cmd_pub = rospy.Publisher("cmd_vel", Twist, queue_size=1)
+        self._cmd_pub = rospy.Publisher("cmd_vel", Twist, queue_size=1, tcp_nodelay=True)
         self._status_pub = rospy.Publisher("~status", String, queue_size=10, latch=True)
         self._goal_sub = rospy.Subscriber("move_base_simple/goal", PoseStamped, self._on_goal, queue_size=1)
         self._truth_sub = (

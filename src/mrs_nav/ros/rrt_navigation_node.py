@@ -121,7 +121,7 @@ class RrtNavigationNode:
         self._lock = threading.Lock()
         self._tf_buffer = tf2_ros.Buffer()
         self._tf_listener = tf2_ros.TransformListener(self._tf_buffer)
-        self._cmd_pub = rospy.Publisher("cmd_vel", Twist, queue_size=1)
+        self._cmd_pub = rospy.Publisher("cmd_vel", Twist, queue_size=1, tcp_nodelay=True)
         self._path_pub = rospy.Publisher("path", Path, queue_size=1, latch=True)
         self._status_pub = rospy.Publisher("~status", String, queue_size=10, latch=True)
         self._map_sub = rospy.Subscriber("map", OccupancyGridMsg, self._on_map, queue_size=1)

@@ -174,7 +174,9 @@ class SimulatorNode:
         self._odom_every = _rate_divisor(config.sim.physics_rate, config.odom_rate, "odom_rate")
         self._clock_every = _rate_divisor(config.sim.physics_rate, config.clock_rate, "clock_rate")
         self._joints_every = _rate_divisor(config.sim.physics_rate, config.joint_states_rate, "joint_states_rate")
-        self._clock_pub = rospy.Publisher("clock", Clock, queue_size=10)
+        # no Nagle on the lockstep round trip (clock out, command back): the last small message before a pause
+        # must not wait for the peer's delayed ACK
+        self._clock_pub = rospy.Publisher("clock", Clock, queue_size=10, tcp_nodelay=True)
         self._odom_pub = rospy.Publisher("odom", OdometryMsg, queue_size=10)
         self._truth_pub = rospy.Publisher("ground_truth/odom", OdometryMsg, queue_size=10)
         self._contacts_pub = rospy.Publisher("ground_truth/contacts", UInt32, queue_size=1, latch=True)
@@ -182,7 +184,7 @@ class SimulatorNode:
         self._scan_pub = rospy.Publisher("scan", LaserScan, queue_size=5)
         self._joints_pub = rospy.Publisher("joint_states", JointState, queue_size=10)
         self._tf = tf2_ros.TransformBroadcaster() if config.publish_tf else None
-        self._cmd_sub = rospy.Subscriber("cmd_vel", Twist, self._on_cmd_vel, queue_size=10)
+        self._cmd_sub = rospy.Subscriber("cmd_vel", Twist, self._on_cmd_vel, queue_size=10, tcp_nodelay=True)
         self._set_own_time = _own_the_clock()
         self._gate = LockstepGate(config.lockstep) if config.lockstep is not None else None
 

@@ -79,7 +79,7 @@ def test_wait_for_command_returns_at_the_silence_timeout() -> None:
     assert time.monotonic() - start < 1.0
 
 
-@pytest.mark.parametrize("period,timeout", [(0.0, 1.0), (0.1, -1.0), (math.nan, 1.0), (0.1, math.inf)])
+@pytest.mark.parametrize(("period", "timeout"), [(0.0, 1.0), (0.1, -1.0), (math.nan, 1.0), (0.1, math.inf)])
 def test_bad_parameters_are_refused(period: float, timeout: float) -> None:
     with pytest.raises(InvalidInputError, match="lockstep"):
         LockstepConfig(period=period, timeout=timeout)
