@@ -6,14 +6,22 @@ true pose is within 0.2 m of the goal and the robot never touched anything. Repo
 time to goal (sim s), distance travelled against the shortest collision-free path (the true map inflated by the
 robot radius, Dijkstra on its cells then shortcut by line of sight), cross-track RMS (true position to the path
 being followed), the SLAM pose error and the real-time factor of the whole stack.
+
+Then (unless ``--ros-runs 0``) the same goals through the real ROS stack: a roscore on a free port,
+``roslaunch mrs_nav rrt_navigation.launch real_time_factor:=0 lockstep:=true`` (simulator, SLAM, RRT*
+navigation as separate processes) and :mod:`mrs_nav.ros.navigation_bench_peer` sending the goal; reported are
+the outcome and the real-time factor achieved from the goal to its outcome.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import statistics
+import subprocess
 import sys
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -23,6 +31,7 @@ from scipy.sparse.csgraph import dijkstra
 from tqdm import tqdm
 
 from mrs_nav.bench.results import markdown_table
+from mrs_nav.bench.ros_processes import RosProcessError, process, read_clock, roscore
 from mrs_nav.demo import Demo, DemoConfig
 from mrs_nav.errors import InvalidInputError, NoPathFoundError
 from mrs_nav.geometry import FloatArray, Pose2D
@@ -53,6 +62,80 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seeds", type=int, default=20, help="runs per world (default 20)")
     parser.add_argument("--worlds", default="arena,office", help="comma-separated: " + ", ".join(SCENARIOS))
     parser.add_argument("--time-budget", type=float, default=0.25, help="planner budget per plan, wall s")
+    parser.add_argument(
+        "--ros-runs", type=int, default=3, help="runs per world through the ROS stack in lockstep (0 = none)"
+    )
+
+
+def ros_run(scenario: Scenario, seed: int) -> dict[str, float]:
+    """One goal through ``rrt_navigation.launch`` at max rate in lockstep; the peer's JSON result."""
+    with tempfile.TemporaryDirectory(prefix="mrs_nav_bench_") as tmp:
+        log_dir = Path(tmp)
+        with roscore(log_dir) as env:
+            launch = [
+                "roslaunch",
+                "--wait",
+                "mrs_nav",
+                "rrt_navigation.launch",
+                f"world:={(WORLDS / scenario.world).resolve()}",
+                f"x:={scenario.start.x}",
+                f"y:={scenario.start.y}",
+                f"yaw:={scenario.start.yaw}",
+                "real_time_factor:=0",
+                "lockstep:=true",
+                "rviz:=false",
+                f"seed:={seed}",
+            ]
+            out = log_dir / "result.json"
+            peer = [sys.executable, "-m", "mrs_nav.ros.navigation_bench_peer", "--out", str(out), "--goal"]
+            peer += [str(v) for v in scenario.goal]
+            with process(launch, env, log_dir / "launch.log") as proc:
+                read_clock(env, timeout=60.0)  # the launch is up and /use_sim_time set before the peer starts
+                done = subprocess.run(peer, env=env, capture_output=True, text=True, timeout=600, check=False)
+                if done.returncode != 0 or not out.is_file():
+                    log = (log_dir / "launch.log").read_text()[-500:]
+                    raise RosProcessError(f"navigation bench peer failed: {done.stderr.strip()[-300:]} {log}")
+                if proc.poll() is not None:
+                    raise RosProcessError(f"roslaunch exited early: {(log_dir / 'launch.log').read_text()[-500:]}")
+            result: dict[str, float] = json.loads(out.read_text())
+    return result
+
+
+def ros_section(names: list[str], runs: int) -> str:
+    """Markdown: the ROS stack in lockstep at max rate, ``runs`` goals per world."""
+    rows = []
+    for name in names:
+        scenario = SCENARIOS[name]
+        results = [ros_run(scenario, seed) for seed in range(runs)]
+        ok = [r for r in results if r["reached"] and r["final_error_m"] <= 0.2 and r["contacts"] == 0]
+        rows.append(
+            [
+                name,
+                runs,
+                f"{len(ok)}/{runs}",
+                sum(int(r["contacts"]) for r in results),
+                _median([r["sim_s"] for r in ok]),
+                _median([r["wall_s"] for r in ok]),
+                _median([r["sim_s"] / r["wall_s"] for r in results]),
+                min(r["sim_s"] / r["wall_s"] for r in results),
+            ]
+        )
+    header = [
+        "world",
+        "runs",
+        "success",
+        "contacts",
+        "time to goal median (sim s)",
+        "(wall s)",
+        "real-time factor median",
+        "min",
+    ]
+    return (
+        "The ROS stack at maximum rate in lockstep (`rrt_navigation.launch real_time_factor:=0 lockstep:=true`: "
+        "simulator, SLAM and RRT* navigation nodes as separate processes, own roscore, seeds 0..; the simulator "
+        "never more than 0.1 s of sim time past the last /cmd_vel). Real-time factor from sending the goal to "
+        "its outcome, while other jobs shared the two cores.\n\n" + markdown_table(header, rows)
+    )
 
 
 def shortest_path_length(
@@ -103,6 +186,8 @@ def _shortcut(points: FloatArray, grid: OccupancyGrid) -> FloatArray:
 def run(args: argparse.Namespace) -> str:
     if args.seeds < 1:
         raise InvalidInputError(f"--seeds must be >= 1, got {args.seeds}")
+    if args.ros_runs < 0:
+        raise InvalidInputError(f"--ros-runs must be >= 0, got {args.ros_runs}")
     names = [n.strip() for n in args.worlds.split(",") if n.strip()]
     unknown = [n for n in names if n not in SCENARIOS]
     if unknown or not names:
@@ -169,7 +254,9 @@ def run(args: argparse.Namespace) -> str:
         "Final error and ATE use the true pose (ATE: SLAM pose against ground truth in the shared map/world "
         "frame, no alignment). Path ratio: true distance travelled plus the straight rest to the goal, over the "
         "shortest collision-free path. Real-time factor: sim time / wall time of the whole run, measured while "
-        "other jobs shared the two cores.\n\n" + markdown_table(header, rows)
+        "other jobs shared the two cores.\n\n"
+        + markdown_table(header, rows)
+        + ("\n\n" + ros_section(names, args.ros_runs) if args.ros_runs else "")
     )
 
 
