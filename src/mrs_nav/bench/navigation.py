@@ -31,7 +31,7 @@ from scipy.sparse.csgraph import dijkstra
 from tqdm import tqdm
 
 from mrs_nav.bench.results import markdown_table
-from mrs_nav.bench.ros_processes import RosProcessError, process, read_clock, roscore
+from mrs_nav.bench.ros_processes import RosProcessError, process, read_clock, roscore, roslaunch_command
 from mrs_nav.demo import Demo, DemoConfig
 from mrs_nav.errors import InvalidInputError, NoPathFoundError
 from mrs_nav.geometry import FloatArray, Pose2D
@@ -72,20 +72,15 @@ def ros_run(scenario: Scenario, seed: int) -> dict[str, float]:
     with tempfile.TemporaryDirectory(prefix="mrs_nav_bench_") as tmp:
         log_dir = Path(tmp)
         with roscore(log_dir) as env:
-            launch = [
-                "roslaunch",
-                "--wait",
-                "mrs_nav",
+            launch = roslaunch_command(
                 "rrt_navigation.launch",
-                f"world:={(WORLDS / scenario.world).resolve()}",
-                f"x:={scenario.start.x}",
-                f"y:={scenario.start.y}",
-                f"yaw:={scenario.start.yaw}",
+                WORLDS / scenario.world,
+                scenario.start,
                 "real_time_factor:=0",
                 "lockstep:=true",
                 "rviz:=false",
                 f"seed:={seed}",
-            ]
+            )
             out = log_dir / "result.json"
             peer = [sys.executable, "-m", "mrs_nav.ros.navigation_bench_peer", "--out", str(out), "--goal"]
             peer += [str(v) for v in scenario.goal]

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from mrs_nav.errors import MrsNavError
+from mrs_nav.geometry import Pose2D
 
 CHECKOUT = Path(__file__).resolve().parents[3]
 
@@ -126,6 +127,21 @@ def roscore(log_dir: Path) -> Iterator[dict[str, str]]:
     with process(["roscore", "-p", str(port)], env, log_dir / "roscore.log"):
         wait_for_master(uri)
         yield env
+
+
+def roslaunch_command(launch_file: str, world: Path, start: Pose2D, *args: str) -> list[str]:
+    """``roslaunch --wait mrs_nav <launch_file>`` in ``world`` from ``start``, then further ``arg:=value``s."""
+    return [
+        "roslaunch",
+        "--wait",
+        "mrs_nav",
+        launch_file,
+        f"world:={world.resolve()}",
+        f"x:={start.x}",
+        f"y:={start.y}",
+        f"yaw:={start.yaw}",
+        *args,
+    ]
 
 
 def read_clock(env: dict[str, str], timeout: float = 20.0) -> tuple[float, float]:

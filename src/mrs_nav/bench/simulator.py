@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 
 from mrs_nav.bench.results import markdown_table
-from mrs_nav.bench.ros_processes import CHECKOUT, RosProcessError, process, read_clock, roscore
+from mrs_nav.bench.ros_processes import CHECKOUT, RosProcessError, process, read_clock, roscore, roslaunch_command
 from mrs_nav.cli.common import parse_floats
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
@@ -91,17 +91,7 @@ def bench_ros(world_path: Path, start: Pose2D, wall_seconds: float) -> dict[str,
     with tempfile.TemporaryDirectory(prefix="mrs_nav_bench_") as tmp:
         log_dir = Path(tmp)
         with roscore(log_dir) as env:
-            launch = [
-                "roslaunch",
-                "--wait",
-                "mrs_nav",
-                "simulation.launch",
-                f"world:={world_path.resolve()}",
-                f"x:={start.x}",
-                f"y:={start.y}",
-                f"yaw:={start.yaw}",
-                "real_time_factor:=0",
-            ]
+            launch = roslaunch_command("simulation.launch", world_path, start, "real_time_factor:=0")
             with process(launch, env, log_dir / "launch.log") as proc:
                 sim0, wall0 = read_clock(env, timeout=60.0)
                 time.sleep(wall_seconds)
