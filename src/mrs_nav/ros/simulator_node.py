@@ -260,7 +260,13 @@ class SimulatorNode:
                 gate.wait_for_command(self.sim.time, 0.1)
                 wall_start += time.monotonic() - waited_from
                 continue
-            self.step()
+            try:
+                self.step()
+            except rospy.ROSException:
+                # Shutdown (from a signal, in another thread) closed the publishers under this step.
+                if rospy.is_shutdown():
+                    return
+                raise
             if rtf > 0.0:
                 ahead = (self.sim.time - sim_start) / rtf - (time.monotonic() - wall_start)
                 if ahead > 0.0:
