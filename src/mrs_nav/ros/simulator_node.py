@@ -238,7 +238,13 @@ class SimulatorNode:
         self._clock_pub.publish(clock_msg(self.sim.time))
         wall_start, sim_start = time.monotonic(), self.sim.time
         while not rospy.is_shutdown():
-            self.step()
+            try:
+                self.step()
+            except rospy.ROSException:
+                # Shutdown (from a signal, in another thread) closed the publishers under this step.
+                if rospy.is_shutdown():
+                    return
+                raise
             if rtf > 0.0:
                 ahead = (self.sim.time - sim_start) / rtf - (time.monotonic() - wall_start)
                 if ahead > 0.0:
