@@ -28,10 +28,6 @@ for name in "${@:-simple office cluttered}"; do
     # shellcheck disable=SC2086  # the drive options are words
     mrs-nav demo ${DRIVE[$n]} --seed 0 --out "$WORK/$n"
     cp "$WORK/$n/session.bag" "$BAGS/$n.bag"
-    # The demo writes its session bag uncompressed; BZ2 (which Debian's rosbag and rosbags both read) keeps the
-    # set to a few MB. Compression leaves the messages, and so the golden metrics, unchanged.
-    rosbag compress --bz2 --quiet "$BAGS/$n.bag"
-    rm -f "$BAGS/$n.orig.bag"
     mrs-nav replay "$BAGS/$n.bag" --plan --plan-first --plan-iterations 3000 "${PARAMS[@]}" --out "$WORK/$n/replay" \
       --write-golden "$BAGS/$n.golden.json"
     echo "$BAGS/$n.bag: $(stat -c %s "$BAGS/$n.bag") bytes, golden $BAGS/$n.golden.json"
