@@ -112,9 +112,8 @@ def path_message(path: FloatArray, seconds: float, frame: str = "map") -> Any:
 class SessionBag:
     """A :class:`mrs_nav.demo.Recorder` writing the session into a bag; use as a context manager."""
 
-    # Uncompressed by default: Debian's rosbag (roslz4) fails with "malformed data to decompress" on the LZ4
-    # chunks rosbags 0.11 writes, and a session bag should open in Debian's rosbag as a recorded one does.
-    def __init__(self, path: Path, laser: LaserParams, *, compress: bool = False) -> None:
+    # Compressed as BagWriter does (BZ2 chunks), which Debian's rosbag reads as it reads a recorded bag.
+    def __init__(self, path: Path, laser: LaserParams, *, compress: bool = True) -> None:
         self.bag_path = path
         self.laser = laser
         path.unlink(missing_ok=True)  # a rerun replaces its bag (rosbags' writer refuses to overwrite)
