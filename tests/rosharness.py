@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import signal
 import subprocess
 import sys
 import time
@@ -18,7 +17,7 @@ import xmlrpc.client
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
-from mrs_nav.bench.ros_processes import TAG_VARIABLE, free_port, kill_tagged, process
+from mrs_nav.bench.ros_processes import TAG_VARIABLE, free_port, kill_tagged, process, stop
 
 REPO = Path(__file__).resolve().parents[1]
 __all__ = ["REPO", "RosMaster", "free_port", "ros_env", "stop", "wait_for"]
@@ -47,18 +46,6 @@ def wait_for(predicate: Callable[[], bool], timeout: float, what: str, period: f
             return
         time.sleep(period)
     raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
-
-
-def stop(proc: subprocess.Popen[bytes], grace: float = 10.0) -> None:
-    """SIGINT the process group (as Ctrl-C would), then SIGKILL whatever is left."""
-    if proc.poll() is None:
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(proc.pid, signal.SIGINT)
-        with contextlib.suppress(subprocess.TimeoutExpired):
-            proc.wait(timeout=grace)
-    with contextlib.suppress(ProcessLookupError):
-        os.killpg(proc.pid, signal.SIGKILL)
-    proc.wait(timeout=5)
 
 
 class RosMaster:
