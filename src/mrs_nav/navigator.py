@@ -29,6 +29,13 @@ of it and the follower has brought its holonomic point to rest at the end of the
 half the tolerance). Without a pose, or when the last map is older than ``map_timeout_s``, the robot is
 stopped and the goal kept; it resumes when both are back. Times are in seconds of the caller's clock (sim
 time in ROS), distances in metres.
+
+Planning can run off the control loop: ``update(pose, now, defer=True)`` does not plan but returns a
+:class:`PlanRequest` in its command; the caller runs :meth:`Navigator.run_plan` on it (in a worker thread: it
+reads only the request and the planner) and hands the outcome to :meth:`Navigator.finish_plan` on a later step,
+which applies the same rules as a synchronous plan. Meanwhile the robot follows the current path when the plan
+is only an offer (``periodic``) and stands still otherwise (the path is gone or unusable), and no other plan is
+started. A new goal, a cancel or reaching the goal discards the request in flight: its outcome is then ignored.
 """
 
 from __future__ import annotations
@@ -109,6 +116,31 @@ class NavCommand:
     omega: float
     path: FloatArray | None = None
     events: tuple[NavEvent, ...] = ()
+    request: PlanRequest | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class PlanRequest:
+    """One plan to make (see :meth:`Navigator.run_plan`): from ``pose`` to ``goal`` on ``grid`` (inflated) and
+    ``raw`` (the same map before inflation), asked at ``now`` for ``reason``; ``remaining_m`` is what was left of
+    the current path then (from the robot), which an optional plan must clearly beat. Compared by identity."""
+
+    goal: tuple[float, float]
+    pose: Pose2D
+    now: float
+    reason: str
+    grid: OccupancyGrid
+    raw: OccupancyGrid
+    remaining_m: float
+
+    @property
+    def optional(self) -> bool:
+        """Whether the current path stays usable (the new plan is only an offer)."""
+        return self.reason == "periodic"
+
+
+# What planning answered: the best result (None when none) and, without one, why.
+PlanOutcome = tuple[PlanResult | None, str]
 
 
 @dataclass(frozen=True)
@@ -221,6 +253,7 @@ class Navigator:
         self._best_distance = math.inf
         self._progress_time = 0.0
         self._holding = False
+        self._pending: PlanRequest | None = None
 
     # -- inputs -------------------------------------------------------------------------------------------
 
@@ -297,11 +330,18 @@ class Navigator:
         self._last_plan_time = -math.inf
         self._best_distance = math.inf
         self._holding = False
+        self._pending = None  # a plan in flight for this goal is now stale
+
+    @property
+    def planning(self) -> bool:
+        """Whether a deferred plan is in flight (asked for and not yet finished)."""
+        return self._pending is not None
 
     # -- the control step ---------------------------------------------------------------------------------
 
-    def update(self, pose: Pose2D | None, now: float) -> NavCommand:
-        """One control step for the robot at ``pose`` (map frame; ``None`` when unknown) at time ``now``."""
+    def update(self, pose: Pose2D | None, now: float, defer: bool = False) -> NavCommand:
+        """One control step for the robot at ``pose`` (map frame; ``None`` when unknown) at time ``now``. With
+        ``defer`` a needed plan is not made here but returned as the command's ``request`` (module docstring)."""
         if self.state is not GoalState.ACTIVE or self.goal is None:
             return NavCommand(0.0, 0.0)
         hold = self._hold_reason(pose, now)
@@ -327,15 +367,21 @@ class Navigator:
             self._progress_time = now
 
         new_path: FloatArray | None = None
-        reason = self.replan_reason(pose, now)
+        request: PlanRequest | None = None
+        reason = None if self._pending is not None else self.replan_reason(pose, now)
         if reason is not None:
-            new_path = self._replan(pose, now, reason, events)
-            if self.state is not GoalState.ACTIVE:
-                return NavCommand(0.0, 0.0, new_path, tuple(events))
-        if self._follower is None:  # no valid plan: wait for the next attempt
-            return NavCommand(0.0, 0.0, new_path, tuple(events))
+            request = self._request(pose, now, reason)
+            if defer:
+                self._pending = request
+            else:
+                new_path = self._adopt(request, self.run_plan(request), events)
+                request = None
+                if self.state is not GoalState.ACTIVE:
+                    return NavCommand(0.0, 0.0, new_path, tuple(events))
+        if self._follower is None:  # no valid plan: wait for the next attempt (or the plan in flight)
+            return NavCommand(0.0, 0.0, new_path, tuple(events), request)
         command = self._follower.command(pose)
-        return NavCommand(command.u, command.omega, new_path, tuple(events))
+        return NavCommand(command.u, command.omega, new_path, tuple(events), request)
 
     def _hold_reason(self, pose: Pose2D | None, now: float) -> str | None:
         if pose is None:
@@ -397,17 +443,61 @@ class Navigator:
         near = np.hypot(rest[:, 0] - pose.x, rest[:, 1] - pose.y) <= self.config.inflation_m + grid.resolution
         return bool(np.any(grid.is_occupied(rest[~near])) or np.any(raw.is_occupied(rest[near])))
 
-    def _replan(self, pose: Pose2D, now: float, reason: str, events: list[NavEvent]) -> FloatArray | None:
+    def _request(self, pose: Pose2D, now: float, reason: str) -> PlanRequest:
+        """Start a plan for ``reason``: the bookkeeping of an attempt, and what the planner needs."""
         assert self.goal is not None
-        optional = reason == "periodic"
-        if not optional:
+        grid, raw = self._maps()
+        remaining = math.inf
+        if reason == "periodic" and self._follower is not None:
+            remaining = path_length(np.vstack(([pose.x, pose.y], self._remaining_path()[:, :2])))
+        else:
             # the current path is unusable: stop following it whatever the outcome
             self._follower = None
             self.path = None
         self._last_plan_time = now
         self._planned_version = self._map_version
         self._checked_version = self._map_version
-        result, why = self._plan(pose)
+        return PlanRequest(self.goal, pose, now, reason, grid, raw, remaining)
+
+    def run_plan(self, request: PlanRequest) -> PlanOutcome:
+        """Plan for ``request`` (from the robot, and from it turned round when so configured; the shorter
+        wins). Reads only the request, the planner and the random generator, so it may run in another thread
+        while :meth:`update` runs (with ``defer``: no other plan is made meanwhile)."""
+        pose = request.pose
+        grid = clear_footprint(request.grid, request.raw, [pose.x, pose.y], self.config.inflation_m)
+        starts = [pose]
+        if self.config.plan_turned_round:
+            starts.append(Pose2D(pose.x, pose.y, wrap_angle(pose.yaw + math.pi)))
+        best: PlanResult | None = None
+        why = "no path"
+        for start in starts:
+            try:
+                result = self.planner(grid, start, request.goal, self.rng)
+            except MrsNavError as err:
+                why = str(err)
+                continue
+            if not result.success or result.path.shape[0] == 0:
+                why = result.reason or "no path"
+            elif best is None or result.length_m < best.length_m:
+                best = result
+        return best, "" if best is not None else why
+
+    def finish_plan(self, request: PlanRequest, outcome: PlanOutcome) -> NavCommand:
+        """Take the ``outcome`` of the deferred ``request``: the new path (``path``, when adopted) and the events;
+        the commands are zero (the next :meth:`update` gives them). A stale request is ignored."""
+        if request is not self._pending:
+            return NavCommand(0.0, 0.0)
+        self._pending = None
+        events: list[NavEvent] = []
+        path = self._adopt(request, outcome, events)
+        return NavCommand(0.0, 0.0, path, tuple(events))
+
+    def _adopt(self, request: PlanRequest, outcome: PlanOutcome, events: list[NavEvent]) -> FloatArray | None:
+        """Apply the outcome of ``request``: count a failure (and fail the goal after too many), or adopt the
+        path (an optional plan only when clearly shorter than the rest of the current path)."""
+        assert self.goal is not None
+        result, why = outcome
+        reason, optional = request.reason, request.optional
         if result is None:
             if optional:
                 return None
@@ -432,14 +522,13 @@ class Navigator:
             return None
         path = self._with_goal(result.path)
         if optional and self._follower is not None:
-            remaining = path_length(np.vstack(([pose.x, pose.y], self._remaining_path())))
-            new = path_length(path)
+            remaining, new = request.remaining_m, path_length(path)
             cfg = self.config
             if not (new < cfg.improvement_ratio * remaining and remaining - new >= cfg.improvement_min_m):
                 return None
         self._failures = 0
         if reason == "stuck":
-            self._progress_time = now
+            self._progress_time = request.now
         self.path = path
         self.last_plan = result
         self.plans_made += 1
@@ -450,27 +539,6 @@ class Navigator:
             )
         )
         return path
-
-    def _plan(self, pose: Pose2D) -> tuple[PlanResult | None, str]:
-        grid, raw = self._maps()
-        assert self.goal is not None
-        grid = clear_footprint(grid, raw, [pose.x, pose.y], self.config.inflation_m)
-        starts = [pose]
-        if self.config.plan_turned_round:
-            starts.append(Pose2D(pose.x, pose.y, wrap_angle(pose.yaw + math.pi)))
-        best: PlanResult | None = None
-        why = "no path"
-        for start in starts:
-            try:
-                result = self.planner(grid, start, self.goal, self.rng)
-            except MrsNavError as err:
-                why = str(err)
-                continue
-            if not result.success or result.path.shape[0] == 0:
-                why = result.reason or "no path"
-            elif best is None or result.length_m < best.length_m:
-                best = result
-        return best, "" if best is not None else why
 
     def _with_goal(self, path: FloatArray) -> FloatArray:
         """The planned path, ending exactly at the goal (planners stop within their own tolerance of it)."""

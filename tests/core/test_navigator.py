@@ -323,3 +323,94 @@ def test_a_goal_behind_the_robot_is_planned_from_the_robot_turned_round() -> Non
     assert abs(cmd.path[0, 2]) == pytest.approx(math.pi)
     assert cmd.u == 0.0  # it turns on the spot rather than backing up
     assert abs(cmd.omega) > 0.0
+
+
+def drive_deferred(nav: Navigator, pose: Pose2D, seconds: float, latency: int, dt: float = 0.1) -> tuple[Pose2D, list]:
+    """:func:`drive` with planning deferred, each plan finishing ``latency`` control steps after it is asked."""
+    events: list = []
+    now, in_flight = 0.0, []
+    while now < seconds and nav.state is GoalState.ACTIVE:
+        if in_flight and in_flight[0][0] <= now:
+            _, request, outcome = in_flight.pop(0)
+            events.extend(nav.finish_plan(request, outcome).events)
+        cmd = nav.update(pose, now, defer=True)
+        events.extend(cmd.events)
+        if cmd.request is not None:
+            in_flight.append((now + latency * dt - 1e-9, cmd.request, nav.run_plan(cmd.request)))
+        yaw = pose.yaw + cmd.omega * dt
+        pose = Pose2D(pose.x + cmd.u * dt * math.cos(pose.yaw), pose.y + cmd.u * dt * math.sin(pose.yaw), yaw)
+        now += dt
+    return pose, events
+
+
+def test_deferred_planning_reaches_the_goal_like_synchronous_planning() -> None:
+    nav = Navigator(astar, NavigatorConfig(replan_period_s=2.0), seed=1)
+    nav.set_map(with_wall(arena(), -0.2, -0.2, 0.2, 0.2), 0.0)
+    nav.set_goal(1.5, 1.5, 0.0)
+    pose, events = drive_deferred(nav, Pose2D(-1.5, -1.5, 0.0), 120.0, latency=5)
+    assert nav.state is GoalState.REACHED
+    assert math.hypot(pose.x - 1.5, pose.y - 1.5) <= 0.2
+    assert kinds(events)[0] is EventKind.PLANNED
+
+
+def test_a_deferred_plan_keeps_the_robot_following_its_path_until_adopted() -> None:
+    planner = ScriptedPlanner([1.3, 1.0])
+    config = NavigatorConfig(replan_period_s=2.0, stray_distance_m=1.0, plan_turned_round=False)
+    nav = Navigator(planner, config)
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(1.5, -1.5, 0.0)
+    pose = Pose2D(-1.5, -1.5, 0.0)
+    first = nav.update(pose, 0.0, defer=True)
+    assert first.request is not None
+    assert (first.u, first.omega) == (0.0, 0.0)
+    assert nav.update(pose, 0.1, defer=True).request is None  # one plan at a time
+    done = nav.finish_plan(first.request, nav.run_plan(first.request))
+    assert done.path is not None
+    assert kinds(done.events) == [EventKind.PLANNED]
+    nav.set_map(arena(), 2.5)
+    periodic = nav.update(pose, 2.5, defer=True)
+    assert periodic.request is not None
+    assert periodic.request.reason == "periodic"
+    assert periodic.u > 0.0  # the current path is still followed while the offer is planned
+    following = nav.update(pose, 2.6, defer=True)
+    assert following.request is None
+    assert following.u > 0.0
+    assert nav.path is done.path
+    adopted = nav.finish_plan(periodic.request, nav.run_plan(periodic.request))
+    assert adopted.path is not None
+    assert path_length(adopted.path) == pytest.approx(3.0)
+    assert planner.calls == 2
+
+
+def test_a_new_goal_discards_the_plan_in_flight_for_the_old_one() -> None:
+    nav = Navigator(astar)
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(1.5, 1.5, 0.0)
+    pose = Pose2D(-1.5, -1.5, 0.0)
+    old = nav.update(pose, 0.0, defer=True).request
+    assert old is not None
+    assert nav.planning
+    nav.set_goal(-1.5, 1.5, 0.5)
+    assert not nav.planning
+    stale = nav.finish_plan(old, nav.run_plan(old))
+    assert stale == NavCommand(0.0, 0.0)
+    assert nav.path is None
+    new = nav.update(pose, 0.6, defer=True).request
+    assert new is not None
+    assert new.goal == (-1.5, 1.5)
+    adopted = nav.finish_plan(new, nav.run_plan(new))
+    assert adopted.path is not None
+    np.testing.assert_allclose(adopted.path[-1, :2], [-1.5, 1.5])
+
+
+def test_deferred_plan_failures_still_end_the_goal_as_failed() -> None:
+    def never(grid: OccupancyGrid, start: Pose2D, goal: tuple[float, float], rng) -> PlanResult:
+        raise NoPathFoundError("time budget used up")
+
+    nav = Navigator(never, NavigatorConfig(max_failed_plans=2, retry_delay_s=1.0))
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(1.5, 1.5, 0.0)
+    pose, events = drive_deferred(nav, Pose2D(-1.5, -1.5, 0.0), 10.0, latency=3)
+    assert nav.state is GoalState.FAILED
+    assert kinds(events) == [EventKind.PLAN_FAILED] * 2 + [EventKind.FAILED]
+    assert (pose.x, pose.y) == (-1.5, -1.5)

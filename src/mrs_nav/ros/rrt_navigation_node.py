@@ -8,12 +8,17 @@ latched, one message per event: ``"<state>: <message>"`` with state one of idle,
 failed, refused). Every event is also logged (warnings for refusals and failures). With ``~heartbeat`` (default
 true) ``cmd_vel`` goes out every control period even while idle (a zero Twist), which is what paces a simulator
 in lockstep; false leaves ``cmd_vel`` silent while idle (e.g. for teleoperation).
+
+Planning runs in one worker thread, off the control timer: the timer keeps publishing ``cmd_vel`` every period
+(following the current path during a periodic replan, a zero Twist while there is no usable path), so a lockstep
+simulator is never held still by a plan, and adopts the plan on the first tick after it is done.
 """
 
 from __future__ import annotations
 
 import math
 import threading
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -26,7 +31,18 @@ from std_msgs.msg import String
 
 from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.geometry import Pose2D
-from mrs_nav.navigator import PLANNERS, EventKind, GoalState, NavEvent, Navigator, NavigatorConfig, rrt_planner
+from mrs_nav.navigator import (
+    PLANNERS,
+    EventKind,
+    GoalState,
+    NavCommand,
+    NavEvent,
+    Navigator,
+    NavigatorConfig,
+    PlanOutcome,
+    PlanRequest,
+    rrt_planner,
+)
 from mrs_nav.path_following import FollowerConfig
 from mrs_nav.ros.navigation_conversions import grid_from_msg, latest_pose, path_msg, pose_in_frame
 
@@ -128,6 +144,9 @@ class RrtNavigationNode:
         self._goal_sub = rospy.Subscriber("move_base_simple/goal", PoseStamped, self._on_goal, queue_size=1)
         self._timer: rospy.Timer | None = None
         self._last_time = rospy.Time(0)
+        # one worker: at most one plan runs at a time (the navigator asks for no other while one is in flight)
+        self._planner_pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="rrt_navigation_plan")
+        self._plan: tuple[PlanRequest, Future[PlanOutcome]] | None = None
 
     def start(self) -> None:
         """Publish the idle status, start the control loop and stop the robot on shutdown."""
@@ -185,19 +204,33 @@ class RrtNavigationNode:
         self._last_time = now
         pose = self._pose()
         with self._lock:
-            if pose is not None and self.navigator.replan_reason(pose, now.to_sec()) is not None:
-                # planning takes wall-clock time while the simulation may run on at many times real time
-                self._cmd_pub.publish(Twist())
-            command = self.navigator.update(pose, now.to_sec())
+            finished = self._finished_plan()
+            command = self.navigator.update(pose, now.to_sec(), defer=True)
+            if command.request is not None:
+                self._plan = (command.request, self._planner_pool.submit(self.navigator.run_plan, command.request))
             state = self.navigator.state
         twist = Twist()
         twist.linear.x, twist.angular.z = command.u, command.omega
+        events = finished.events + command.events
         # the heartbeat (a zero Twist every tick while idle) paces a lockstep simulator at any sim rate
-        if self.config.heartbeat or state is GoalState.ACTIVE or command.events:
+        if self.config.heartbeat or state is GoalState.ACTIVE or events:
             self._cmd_pub.publish(twist)
-        if command.path is not None:
-            self._path_pub.publish(path_msg(command.path, now, self.config.map_frame))
-        self._report(command.events)
+        path = command.path if command.path is not None else finished.path
+        if path is not None:
+            self._path_pub.publish(path_msg(path, now, self.config.map_frame))
+        self._report(events)
+
+    def _finished_plan(self) -> NavCommand:
+        """Hand a finished plan (if any) to the navigator (called with the lock held); its path and events."""
+        if self._plan is None or not self._plan[1].done():
+            return NavCommand(0.0, 0.0)
+        request, future = self._plan
+        self._plan = None
+        try:
+            outcome = future.result()
+        except Exception as err:  # a planner bug must not kill the control loop: count it as a failed plan
+            outcome = (None, f"planner error: {err!r}")
+        return self.navigator.finish_plan(request, outcome)
 
     def _report(self, events: list[NavEvent] | tuple[NavEvent, ...]) -> None:
         """Log each event and publish it on ``~status``."""
@@ -208,4 +241,5 @@ class RrtNavigationNode:
     def _stop(self) -> None:
         if self._timer is not None:
             self._timer.shutdown()
+        self._planner_pool.shutdown(wait=False)
         self._cmd_pub.publish(Twist())
