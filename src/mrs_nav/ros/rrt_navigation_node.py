@@ -17,6 +17,7 @@ simulator is never held still by a plan, and adopts the plan on the first tick a
 from __future__ import annotations
 
 import math
+import sys
 import threading
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -152,6 +153,9 @@ class RrtNavigationNode:
         """Publish the idle status, start the control loop and stop the robot on shutdown."""
         self._status_pub.publish(String(data="idle: waiting for a goal"))
         rospy.on_shutdown(self._stop)
+        # The planner thread holds the GIL for long stretches; the default 5 ms switch interval would delay each
+        # /clock, /tf and timer hand-off of the control loop by up to that, which is what paces a lockstep sim.
+        sys.setswitchinterval(0.0005)
         self._timer = rospy.Timer(rospy.Duration(1.0 / self.config.rate_hz), self._on_timer)
 
     # -- inputs ---------------------------------------------------------------------------------------------
