@@ -64,3 +64,15 @@ def test_catkin_make_builds_a_workspace_that_finds_the_package(tmp_path: Path) -
     found, module = result.stdout.split()[-2:]
     assert Path(found).resolve() == REPO
     assert Path(module).resolve() == REPO / "src" / "mrs_nav" / "world.py"
+
+
+def test_a_closed_pipe_is_not_an_error() -> None:
+    """``mrs-nav plan --json | head -c 10``: the reader leaves early, the command exits without a traceback."""
+    cmd = (
+        f"{sys.executable} -m mrs_nav plan --world {REPO / 'worlds' / 'simple.world'} --planner rrt_star "
+        "--start -1.5,-1.5,0 --goal 1.5,1.5 --seed 1 --iterations 300 --json | head -c 10"
+    )
+    env = {**os.environ, "PYTHONPATH": str(REPO / "src")}
+    result = subprocess.run(["bash", "-c", cmd], capture_output=True, text=True, env=env, check=False)
+    assert result.stdout == '{"success"'
+    assert "Traceback" not in result.stderr, result.stderr
