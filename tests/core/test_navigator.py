@@ -230,14 +230,16 @@ def test_periodic_plans_replace_the_path_only_when_clearly_shorter() -> None:
     assert path_length(cmd.path) == pytest.approx(3.0)
 
 
-def test_repeated_planning_failures_end_the_goal_as_failed() -> None:
+@pytest.mark.parametrize("deferred", [False, True])
+def test_repeated_planning_failures_end_the_goal_as_failed(deferred: bool) -> None:
     def never(grid: OccupancyGrid, start: Pose2D, goal: tuple[float, float], rng) -> PlanResult:
         raise NoPathFoundError("time budget used up")
 
     nav = Navigator(never, NavigatorConfig(max_failed_plans=3, retry_delay_s=1.0))
     nav.set_map(arena(), 0.0)
     nav.set_goal(1.5, 1.5, 0.0)
-    pose, events = drive(nav, Pose2D(-1.5, -1.5, 0.0), 10.0)
+    start = Pose2D(-1.5, -1.5, 0.0)
+    pose, events = drive_deferred(nav, start, 10.0, latency=3) if deferred else drive(nav, start, 10.0)
     assert nav.state is GoalState.FAILED
     assert kinds(events) == [EventKind.PLAN_FAILED] * 3 + [EventKind.FAILED]
     assert "time budget" in events[-1].message
@@ -401,16 +403,3 @@ def test_a_new_goal_discards_the_plan_in_flight_for_the_old_one() -> None:
     adopted = nav.finish_plan(new, nav.run_plan(new))
     assert adopted.path is not None
     np.testing.assert_allclose(adopted.path[-1, :2], [-1.5, 1.5])
-
-
-def test_deferred_plan_failures_still_end_the_goal_as_failed() -> None:
-    def never(grid: OccupancyGrid, start: Pose2D, goal: tuple[float, float], rng) -> PlanResult:
-        raise NoPathFoundError("time budget used up")
-
-    nav = Navigator(never, NavigatorConfig(max_failed_plans=2, retry_delay_s=1.0))
-    nav.set_map(arena(), 0.0)
-    nav.set_goal(1.5, 1.5, 0.0)
-    pose, events = drive_deferred(nav, Pose2D(-1.5, -1.5, 0.0), 10.0, latency=3)
-    assert nav.state is GoalState.FAILED
-    assert kinds(events) == [EventKind.PLAN_FAILED] * 2 + [EventKind.FAILED]
-    assert (pose.x, pose.y) == (-1.5, -1.5)
