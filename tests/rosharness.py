@@ -17,7 +17,7 @@ import xmlrpc.client
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
-from mrs_nav.bench.ros_processes import TAG_VARIABLE, free_port, kill_tagged, process, stop
+from mrs_nav.ros_processes import TAG_VARIABLE, free_port, kill_tagged, process, stop
 
 REPO = Path(__file__).resolve().parents[1]
 __all__ = ["REPO", "RosMaster", "free_port", "ros_env", "stop", "wait_for"]

@@ -55,7 +55,7 @@ def test_catkin_make_builds_a_workspace_that_finds_the_package(tmp_path: Path) -
         "catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 > build.log 2>&1 || { tail -30 build.log; exit 1; }\n"
         "source devel/setup.bash\n"
         "rospack find mrs_nav\n"
-        "/usr/bin/python3 -c 'import mrs_nav.world, sys; print(mrs_nav.world.__file__)'\n"
+        "/usr/bin/python3 -c 'import mrs_nav.maps.world, sys; print(mrs_nav.maps.world.__file__)'\n"
     )
     result = subprocess.run(
         ["bash", "-c", script], cwd=tmp_path / "ws", env=env, capture_output=True, text=True, check=False, timeout=300

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from mrs_nav.world import load_world
+from mrs_nav.maps.world import load_world
 from tests.rosharness import REPO
 
 HERE = REPO / "tests" / "sdformat"

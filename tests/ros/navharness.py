@@ -8,8 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from mrs_nav.obstacles import Obstacles
-from mrs_nav.world import load_world
+from mrs_nav.maps.obstacles import Obstacles
+from mrs_nav.maps.world import load_world
 from tests.rosharness import REPO
 
 FOOTPRINT_RADIUS = 0.105  # m, the simulated Burger's chassis

@@ -14,11 +14,11 @@ from rosbags.rosbag1 import Reader, Writer
 
 from mrs_nav.bag import topics
 from mrs_nav.bag.io import typestore
-from mrs_nav.cli.replay import parse_params
 from mrs_nav.replay.map_compare import compare_maps
 from mrs_nav.replay.recorded import grid_from_message
 from mrs_nav.replay.session_replay import replayed_map
 from mrs_nav.replay.slam_replay import replay_slam
+from mrs_nav.slam.config import SlamConfig
 from tests.rosharness import RosMaster, stop, wait_for
 
 pytestmark = pytest.mark.ros
@@ -61,7 +61,8 @@ def test_rosbag_play_into_the_slam_node_agrees_with_offline_replay(
     bag = tmp_path / "sensors.bag"
     _sensor_bag(BAGS / "simple.bag", bag)
     golden = json.loads((BAGS / "simple.golden.json").read_text())
-    config = parse_params([o.removeprefix("--param=") for o in golden["options"] if o.startswith("--param=")])
+    params = [o.removeprefix("--param=") for o in golden["options"] if o.startswith("--param=")]
+    config = SlamConfig.from_assignments(params)
     offline = replayed_map(replay_slam(bag, config))
 
     lock = threading.Lock()

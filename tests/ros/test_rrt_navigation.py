@@ -12,8 +12,8 @@ from typing import Any
 
 import pytest
 
-from mrs_nav.rasterize import rasterize_world
-from mrs_nav.world import load_world
+from mrs_nav.maps.rasterize import rasterize_world
+from mrs_nav.maps.world import load_world
 from tests.ros.navharness import FOOTPRINT_RADIUS, StatusLog, TruthTrack
 from tests.rosharness import REPO, RosMaster, wait_for
 

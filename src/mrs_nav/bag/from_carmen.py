@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
+from mrs_nav.bag.carmen import CarmenScan, read_flaser
 from mrs_nav.bag.io import BagWriter
 from mrs_nav.bag.messages import LASER_SCAN, ODOMETRY, laser_scan_message, odometry_message, tf_message
-from mrs_nav.carmen import CarmenScan, read_flaser
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.motion_model import OdometryNoise, noisy_odometry

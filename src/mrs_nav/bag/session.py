@@ -16,10 +16,10 @@ import numpy as np
 
 from mrs_nav.bag.io import TF_MESSAGE, BagWriter, typestore
 from mrs_nav.bag.messages import LASER_SCAN, ODOMETRY, _header, _pose_parts, _time, laser_scan_message
-from mrs_nav.demo import laser_scan_data
 from mrs_nav.geometry import FloatArray, Pose2D
-from mrs_nav.occupancy_grid import OccupancyGrid
+from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.sim import LaserParams, Scan
+from mrs_nav.slam.sim_drive import laser_scan_data
 
 CLOCK = "rosgraph_msgs/msg/Clock"
 TWIST = "geometry_msgs/msg/Twist"
@@ -110,7 +110,7 @@ def path_message(path: FloatArray, seconds: float, frame: str = "map") -> Any:
 
 
 class SessionBag:
-    """A :class:`mrs_nav.demo.Recorder` writing the session into a bag; use as a context manager."""
+    """A :class:`mrs_nav.stack.demo.Recorder` writing the session into a bag; use as a context manager."""
 
     # Compressed as BagWriter does (BZ2 chunks), which Debian's rosbag reads as it reads a recorded bag.
     def __init__(self, path: Path, laser: LaserParams, *, compress: bool = True) -> None:

@@ -1,6 +1,6 @@
 """Whole stack (simulator + SLAM + RRT* navigation) headless at max rate, over seeds, in the arena and the office.
 
-Each run is :class:`mrs_nav.demo.Demo` with one goal: the robot starts with no map, SLAM maps on the way and
+Each run is :class:`mrs_nav.stack.demo.Demo` with one goal: the robot starts with no map, SLAM maps on the way and
 the navigator plans through unknown space. A run succeeds when the navigator reports the goal reached, the
 true pose is within 0.2 m of the goal and the robot never touched anything. Reported per world: success rate,
 time to goal (sim s), distance travelled against the shortest collision-free path (the true map inflated by the
@@ -31,17 +31,18 @@ from scipy.sparse.csgraph import dijkstra
 from tqdm import tqdm
 
 from mrs_nav.bench.results import markdown_table
-from mrs_nav.bench.ros_processes import RosProcessError, process, read_clock, roscore, roslaunch_command
-from mrs_nav.demo import Demo, DemoConfig
 from mrs_nav.errors import InvalidInputError, NoPathFoundError
 from mrs_nav.geometry import FloatArray, Pose2D
-from mrs_nav.navigator import cell_centres, densify
-from mrs_nav.occupancy_grid import BURGER_RADIUS, OccupancyGrid
+from mrs_nav.maps.occupancy_grid import OccupancyGrid
+from mrs_nav.maps.rasterize import rasterize_world
+from mrs_nav.maps.world import World, load_world
+from mrs_nav.navigation.navigator import cell_centres, densify
 from mrs_nav.planning import path_length
-from mrs_nav.rasterize import rasterize_world
-from mrs_nav.world import World, load_world
+from mrs_nav.resources import WORLDS_DIR
+from mrs_nav.robot import BURGER_RADIUS
+from mrs_nav.ros_processes import RosProcessError, process, read_clock, roscore, roslaunch_command
+from mrs_nav.stack.demo import Demo, DemoConfig
 
-WORLDS = Path(__file__).resolve().parents[3] / "worlds"
 ROS_TARGET_RTF = 5.0  # the whole ROS stack at max rate, sim s per wall s (issue 6)
 
 
@@ -75,7 +76,7 @@ def ros_run(scenario: Scenario, seed: int) -> dict[str, float]:
         with roscore(log_dir) as env:
             launch = roslaunch_command(
                 "rrt_navigation.launch",
-                WORLDS / scenario.world,
+                WORLDS_DIR / scenario.world,
                 scenario.start,
                 "real_time_factor:=0",
                 "lockstep:=true",
@@ -209,7 +210,7 @@ def run(args: argparse.Namespace) -> str:
     bar = tqdm(total=args.seeds * len(names), unit="run", file=sys.stderr, disable=not sys.stderr.isatty())
     for name in names:
         scenario = SCENARIOS[name]
-        world = load_world(WORLDS / scenario.world)
+        world = load_world(WORLDS_DIR / scenario.world)
         shortest = shortest_path_length(world, scenario.start, scenario.goal)
         successes, contacts, times, ratios, cross, final, ate, rtf = 0, 0, [], [], [], [], [], []
         for seed in range(args.seeds):
@@ -247,7 +248,7 @@ def run(args: argparse.Namespace) -> str:
         )
     bar.close()
     return (
-        "Whole stack in one process (`mrs_nav.demo`): ODE simulator at 100 Hz with the 5 Hz laser, SLAM, RRT* "
+        "Whole stack in one process (`mrs_nav.stack.demo`): ODE simulator at 100 Hz with the 5 Hz laser, SLAM, RRT* "
         f"({args.time_budget} s per plan) through unknown space, path follower at 10 Hz; no map at the start. "
         "Success = navigator reports the goal reached, true pose within 0.2 m, no contact. "
         "Final error and ATE use the true pose (ATE: SLAM pose against ground truth in the shared map/world "

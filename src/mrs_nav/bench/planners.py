@@ -28,12 +28,14 @@ import numpy as np
 
 from mrs_nav.bench.results import markdown_table
 from mrs_nav.geometry import Pose2D
-from mrs_nav.occupancy_grid import BURGER_RADIUS, OCCUPIED, OccupancyGrid
-from mrs_nav.rasterize import rasterize_world
-from mrs_nav.rrt import RRTConfig, grow_rrt
-from mrs_nav.rrt_scenarios import CHECKOUT, COURSE_GOAL, COURSE_START, course_grid
-from mrs_nav.rrt_star import RRTStarConfig, grow_rrt_star
-from mrs_nav.world import load_world
+from mrs_nav.maps.occupancy_grid import OCCUPIED, OccupancyGrid
+from mrs_nav.maps.rasterize import rasterize_world
+from mrs_nav.maps.world import load_world
+from mrs_nav.resources import WORLDS_DIR
+from mrs_nav.robot import BURGER_RADIUS
+from mrs_nav.trees.rrt import RRTConfig, grow_rrt
+from mrs_nav.trees.rrt_star import RRTStarConfig, grow_rrt_star
+from mrs_nav.trees.scenarios import COURSE_GOAL, COURSE_START, course_grid
 
 ARENA_START = COURSE_START
 ARENA_GOAL = COURSE_GOAL
@@ -53,7 +55,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--office",
         type=Path,
-        default=CHECKOUT / "worlds" / "office.world",
+        default=WORLDS_DIR / "office.world",
         help="20 m x 20 m world for the scaling runs (a synthetic grid is used when missing)",
     )
 

@@ -1,9 +1,9 @@
 """Potential field: success rate, planning time and path-length ratio over seeds in both trap cases.
 
 For each trap (cylinder at the origin in the course arena; two overlapping cylinders) and each seed, one
-:func:`~mrs_nav.randomized_potential_field.plan_potential_field` call is timed (descent, escapes and
+:func:`~mrs_nav.fields.randomized_potential_field.plan_potential_field` call is timed (descent, escapes and
 simplification). The ratio compares the simplified path with the exact shortest path among the circles
-(:mod:`mrs_nav.shortest_path`; the arena walls are left out of that yardstick, which only makes it shorter,
+(:mod:`mrs_nav.fields.shortest_path`; the arena walls are left out of that yardstick, which only makes it shorter,
 so the ratio is if anything overstated). A baseline row runs the plain descent (no noise, no random walk).
 """
 
@@ -16,10 +16,10 @@ import numpy as np
 from tqdm import tqdm
 
 from mrs_nav.bench.results import markdown_table
-from mrs_nav.obstacles import Obstacles
-from mrs_nav.potential_field_scenarios import Scenario, symmetric_trap, two_cylinder_trap
-from mrs_nav.randomized_potential_field import EscapeSettings, plan_potential_field
-from mrs_nav.shortest_path import shortest_path
+from mrs_nav.fields.randomized_potential_field import EscapeSettings, plan_potential_field
+from mrs_nav.fields.scenarios import Scenario, symmetric_trap, two_cylinder_trap
+from mrs_nav.fields.shortest_path import shortest_path
+from mrs_nav.maps.obstacles import Obstacles
 
 HEADER = [
     "case",

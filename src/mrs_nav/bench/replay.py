@@ -21,12 +21,12 @@ from tqdm import tqdm
 from mrs_nav.bag.from_carmen import carmen_to_bag
 from mrs_nav.bench.results import markdown_table
 from mrs_nav.bench.slam import DEFAULT_LOG, INTEL_CONFIG
-from mrs_nav.cli.replay import parse_params
 from mrs_nav.motion_model import DEFAULT_ALPHAS, OdometryNoise
 from mrs_nav.replay.slam_replay import SlamReplay, replay_slam
+from mrs_nav.resources import CHECKOUT
 from mrs_nav.slam.config import SlamConfig
 
-DEFAULT_BAGS = Path(__file__).resolve().parents[3] / "tests" / "data" / "bags"
+DEFAULT_BAGS = CHECKOUT / "tests" / "data" / "bags"
 REALTIME_TARGET = 15.0  # DESIGN.md: the Intel log processed >= 15x faster than real time
 
 
@@ -69,7 +69,7 @@ def golden_config(bag: Path) -> SlamConfig:
     if not golden.is_file():
         return SlamConfig()
     options = json.loads(golden.read_text(encoding="utf-8")).get("options", [])
-    return parse_params([o.removeprefix("--param=") for o in options if o.startswith("--param=")])
+    return SlamConfig.from_assignments([o.removeprefix("--param=") for o in options if o.startswith("--param=")])
 
 
 def run(args: argparse.Namespace) -> str:

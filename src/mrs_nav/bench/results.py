@@ -12,6 +12,8 @@ import platform
 import re
 from pathlib import Path
 
+from mrs_nav.resources import CHECKOUT
+
 _HEADER = (
     "# mrs_nav benchmark results\n\n"
     "Written by `mrs-nav bench NAME`; each section is replaced when its benchmark runs again.\n"
@@ -40,9 +42,8 @@ def machine_description() -> str:
 
 def default_results_path() -> Path:
     """``bench/RESULTS.md`` of the source checkout when running from one, else of the current folder."""
-    checkout = Path(__file__).resolve().parents[3]
-    if (checkout / "package.xml").is_file() and (checkout / "bench").is_dir():
-        return checkout / "bench" / "RESULTS.md"
+    if (CHECKOUT / "package.xml").is_file() and (CHECKOUT / "bench").is_dir():
+        return CHECKOUT / "bench" / "RESULTS.md"
     return Path.cwd() / "bench" / "RESULTS.md"
 
 

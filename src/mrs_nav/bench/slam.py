@@ -17,16 +17,17 @@ import numpy as np
 
 from mrs_nav.bag.from_carmen import carmen_to_bag
 from mrs_nav.bench.results import markdown_table
+from mrs_nav.maps.world import load_world
 from mrs_nav.motion_model import DEFAULT_ALPHAS, OdometryNoise
 from mrs_nav.replay.slam_replay import replay_slam
+from mrs_nav.resources import CHECKOUT, WORLDS_DIR
 from mrs_nav.sim.simulator import SimulatorConfig
 from mrs_nav.slam.config import SlamConfig
 from mrs_nav.slam.metrics import trajectory_errors
 from mrs_nav.slam.sim_drive import OFFICE_START, OFFICE_WAYPOINTS, drive_with_slam
-from mrs_nav.world import load_world
 
-DEFAULT_LOG = Path(__file__).resolve().parents[4] / "shared" / "data" / "intel-corrected.log.gz"
-OFFICE = Path(__file__).resolve().parents[3] / "worlds" / "office.world"
+DEFAULT_LOG = CHECKOUT.parent / "shared" / "data" / "intel-corrected.log.gz"
+OFFICE = WORLDS_DIR / "office.world"
 # Every logged scan is processed; beams beyond 30 m (none in this log) would only clear free space.
 INTEL_CONFIG = SlamConfig(maxUrange=30.0, linearUpdate=0.0, angularUpdate=0.0)
 RPE_TARGET_M = 0.07

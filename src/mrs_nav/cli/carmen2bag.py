@@ -10,8 +10,9 @@ from typing import Any
 from tqdm import tqdm
 
 from mrs_nav.bag.from_carmen import carmen_to_bag
-from mrs_nav.cli.common import parse_floats, print_json
+from mrs_nav.cli.common import print_json
 from mrs_nav.motion_model import DEFAULT_ALPHAS, OdometryNoise
+from mrs_nav.options import parse_floats
 
 _DEFAULT_NOISE = ",".join(f"{a:g}" for a in DEFAULT_ALPHAS)
 

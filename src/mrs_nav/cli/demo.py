@@ -10,12 +10,14 @@ from typing import Any
 from tqdm import tqdm
 
 from mrs_nav.bag.session import SessionBag
-from mrs_nav.cli.common import parse_floats, print_json
-from mrs_nav.demo import Demo, DemoConfig, save_figure
+from mrs_nav.cli.common import print_json
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
-from mrs_nav.map_io import save_map
-from mrs_nav.world import load_world
+from mrs_nav.maps.map_io import save_map
+from mrs_nav.maps.world import load_world
+from mrs_nav.options import parse_floats
+from mrs_nav.resources import WORLDS_DIR
+from mrs_nav.stack.demo import Demo, DemoConfig, save_figure
 
 # Start pose and goals used when --start / --goals are not given, per shipped world.
 DEFAULTS = {
@@ -23,7 +25,6 @@ DEFAULTS = {
     "office": ("-5,-5,0", "2,-2;-7.5,3.5"),
     "cluttered": ("-4,-4,0.785", "4,4"),
 }
-WORLDS_DIR = Path(__file__).resolve().parents[3] / "worlds"
 
 
 def resolve_world(text: str) -> Path:

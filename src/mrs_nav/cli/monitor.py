@@ -12,8 +12,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-from mrs_nav.cli.common import parse_floats, print_json
+from mrs_nav.cli.common import print_json
 from mrs_nav.errors import InvalidInputError, MrsNavError
+from mrs_nav.options import parse_floats
 
 # ANSI: cursor home + clear screen, for the live redraw on a terminal.
 _CLEAR = "\x1b[H\x1b[2J"

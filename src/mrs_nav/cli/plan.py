@@ -14,14 +14,15 @@ from pathlib import Path
 from typing import Any
 
 from mrs_nav.cli import tree_planners
-from mrs_nav.cli.common import fail, parse_floats, print_json
+from mrs_nav.cli.common import fail, print_json
 from mrs_nav.errors import InvalidInputError
+from mrs_nav.fields.potential_field import Bounds, PotentialField, workspace_bounds
+from mrs_nav.fields.randomized_potential_field import EscapeSettings, plan_potential_field
 from mrs_nav.geometry import Pose2D
-from mrs_nav.obstacles import Obstacles
+from mrs_nav.maps.obstacles import Obstacles
+from mrs_nav.maps.world import load_world
+from mrs_nav.options import parse_floats
 from mrs_nav.planning import PlanResult
-from mrs_nav.potential_field import Bounds, PotentialField, workspace_bounds
-from mrs_nav.randomized_potential_field import EscapeSettings, plan_potential_field
-from mrs_nav.world import load_world
 
 Planner = Callable[[argparse.Namespace, Pose2D, tuple[float, float]], PlanResult]
 

@@ -13,7 +13,6 @@ from tqdm import tqdm
 
 from mrs_nav.bag.salvage import readable_bag
 from mrs_nav.cli.common import fail, print_json
-from mrs_nav.errors import InvalidInputError
 from mrs_nav.replay.golden import dump_json, load_golden, make_golden, regressions
 from mrs_nav.replay.session_replay import PlanOptions, SessionReplay, replay_session, write_session_outputs
 from mrs_nav.replay.slam_replay import write_outputs
@@ -62,17 +61,6 @@ def register(subparsers: Any) -> None:
     parser.set_defaults(handler=run)
 
 
-def parse_params(items: list[str]) -> SlamConfig:
-    """``["name=value", ...]`` into a validated :class:`SlamConfig`."""
-    values: dict[str, str] = {}
-    for item in items:
-        name, sep, value = item.partition("=")
-        if not sep or not name.strip():
-            raise InvalidInputError(f"--param: expected NAME=VALUE, got {item!r}")
-        values[name.strip()] = value.strip()
-    return SlamConfig.from_mapping(values)
-
-
 def _options(args: argparse.Namespace) -> list[str]:
     """The options that change the metrics, recorded in a golden file (to replay it the same way)."""
     options = ["--slam", *(f"--param={p}" for p in args.param)]
@@ -106,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
         return fail("nothing to do: give --slam and/or --plan")
     if args.plan_iterations < 1 or args.seed < 0:
         return fail(f"--plan-iterations must be >= 1 and --seed >= 0, got {args.plan_iterations} and {args.seed}")
-    config = parse_params(args.param)
+    config = SlamConfig.from_assignments(args.param)
     golden = load_golden(args.against) if args.against else None
     session = _replay(args, config)
     result = session.slam

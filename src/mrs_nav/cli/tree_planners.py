@@ -14,14 +14,15 @@ import numpy as np
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
-from mrs_nav.map_io import load_map
-from mrs_nav.occupancy_grid import BURGER_RADIUS, OccupancyGrid
+from mrs_nav.maps.map_io import load_map
+from mrs_nav.maps.occupancy_grid import OccupancyGrid
+from mrs_nav.maps.rasterize import DEFAULT_RESOLUTION, rasterize_world
+from mrs_nav.maps.world import load_world
 from mrs_nav.planning import PlanResult
-from mrs_nav.rasterize import DEFAULT_RESOLUTION, rasterize_world
-from mrs_nav.rrt import RRTConfig, grow_rrt
-from mrs_nav.rrt_star import RRTStarConfig, grow_rrt_star
-from mrs_nav.rrt_tree import Search
-from mrs_nav.world import load_world
+from mrs_nav.robot import BURGER_RADIUS
+from mrs_nav.trees.rrt import RRTConfig, grow_rrt
+from mrs_nav.trees.rrt_star import RRTStarConfig, grow_rrt_star
+from mrs_nav.trees.tree import Search
 
 #: RRT* runs for this long when neither --time-budget nor --iterations is given (seconds).
 DEFAULT_STAR_BUDGET = 0.5
@@ -87,7 +88,7 @@ def _finish(
     title: str,
 ) -> PlanResult:
     if args.png is not None:
-        from mrs_nav.tree_drawing import draw_search  # noqa: PLC0415 - matplotlib only when drawing
+        from mrs_nav.figures.tree_drawing import draw_search  # noqa: PLC0415 - matplotlib only when drawing
 
         draw_search(search, grid, planning, start=start, goal=np.array(goal), title=title, out=args.png)
     return search.result

@@ -14,7 +14,7 @@ import numpy as np
 from matplotlib.patches import Circle, Polygon
 
 from mrs_nav.geometry import FloatArray
-from mrs_nav.obstacles import Obstacles
+from mrs_nav.maps.obstacles import Obstacles
 
 OBSTACLE_COLOUR = "#7f7f7f"
 

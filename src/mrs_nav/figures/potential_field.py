@@ -16,15 +16,15 @@ from typing import Any
 
 import numpy as np
 
+from mrs_nav.fields.path_simplification import simplify_path
+from mrs_nav.fields.potential_field import FieldMode, PotentialField, trace
+from mrs_nav.fields.randomized_potential_field import EscapeSettings, Rollout, planned_points, roll_out
+from mrs_nav.fields.scenarios import Scenario, course_arena, symmetric_trap, two_cylinder_trap
+from mrs_nav.fields.shortest_path import shortest_path
 from mrs_nav.figures.drawing import Limits, draw_field, draw_obstacles, grid, new_axes, new_panels, save
 from mrs_nav.geometry import FloatArray
-from mrs_nav.obstacles import Obstacles
-from mrs_nav.path_simplification import simplify_path
+from mrs_nav.maps.obstacles import Obstacles
 from mrs_nav.planning import path_length
-from mrs_nav.potential_field import FieldMode, PotentialField, trace
-from mrs_nav.potential_field_scenarios import Scenario, course_arena, symmetric_trap, two_cylinder_trap
-from mrs_nav.randomized_potential_field import EscapeSettings, Rollout, planned_points, roll_out
-from mrs_nav.shortest_path import shortest_path
 
 ARENA_LIMITS = (-2.2, -2.2, 2.2, 2.2)
 TRAP_LIMITS = (-2.0, -1.5, 2.0, 1.5)

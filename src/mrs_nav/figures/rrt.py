@@ -10,11 +10,11 @@ from pathlib import Path
 
 import numpy as np
 
-from mrs_nav.occupancy_grid import BURGER_RADIUS
-from mrs_nav.rrt import RRTConfig, grow_rrt
-from mrs_nav.rrt_scenarios import COURSE_GOAL, COURSE_START, course_grid
-from mrs_nav.rrt_star import RRTStarConfig, grow_rrt_star
-from mrs_nav.tree_drawing import draw_search
+from mrs_nav.figures.tree_drawing import draw_search
+from mrs_nav.robot import BURGER_RADIUS
+from mrs_nav.trees.rrt import RRTConfig, grow_rrt
+from mrs_nav.trees.rrt_star import RRTStarConfig, grow_rrt_star
+from mrs_nav.trees.scenarios import COURSE_GOAL, COURSE_START, course_grid
 
 #: RRT* iterations drawn in Figure 10.
 STAR_ITERATIONS = 1500

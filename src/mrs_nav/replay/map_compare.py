@@ -19,7 +19,7 @@ import numpy.typing as npt
 from scipy import ndimage
 
 from mrs_nav.errors import InvalidInputError
-from mrs_nav.occupancy_grid import OccupancyGrid
+from mrs_nav.maps.occupancy_grid import OccupancyGrid
 
 BoolArray = npt.NDArray[np.bool_]
 

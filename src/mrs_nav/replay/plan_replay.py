@@ -17,10 +17,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from mrs_nav.geometry import Pose2D, wrap_angle
-from mrs_nav.occupancy_grid import BURGER_RADIUS, FREE, UNKNOWN, OccupancyGrid
+from mrs_nav.maps.occupancy_grid import OccupancyGrid, planning_grid
 from mrs_nav.planning import PlanResult
 from mrs_nav.replay.recorded import Goal
-from mrs_nav.rrt_star import RRTStarConfig, rrt_star
+from mrs_nav.robot import BURGER_RADIUS
+from mrs_nav.trees.rrt_star import RRTStarConfig, rrt_star
 
 
 @dataclass(frozen=True)
@@ -30,13 +31,6 @@ class GoalPlan:
     start: Pose2D
     goal: Goal
     result: PlanResult
-
-
-def planning_grid(grid: OccupancyGrid, robot_radius: float = BURGER_RADIUS) -> OccupancyGrid:
-    """``grid`` with unknown cells made free, then obstacles grown by ``robot_radius`` (m)."""
-    values = grid.values.copy()
-    values[values == UNKNOWN] = FREE
-    return OccupancyGrid(values, grid.resolution, grid.origin).inflate(robot_radius)
 
 
 def replan_goals(
@@ -52,7 +46,7 @@ def replan_goals(
 
     With ``first_path`` each query stops at its first path to the goal (reachability at a fraction of the cost).
     """
-    plan_grid = planning_grid(grid)
+    plan_grid = planning_grid(grid, BURGER_RADIUS, allow_unknown=True)
     config = RRTStarConfig(iterations=iterations, time_budget=None, stop_at_first=first_path)
     plans = []
     for i, goal in enumerate(goals):

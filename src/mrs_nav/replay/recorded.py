@@ -16,7 +16,7 @@ from mrs_nav.bag.io import read_messages
 from mrs_nav.bag.messages import pose_from_odometry, stamp_of
 from mrs_nav.errors import BagError, InvalidInputError
 from mrs_nav.geometry import Pose2D, yaw_from_quaternion
-from mrs_nav.occupancy_grid import OccupancyGrid
+from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.planning import path_length
 from mrs_nav.replay.pose_track import PoseTrack
 

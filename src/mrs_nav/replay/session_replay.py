@@ -25,7 +25,7 @@ from mrs_nav.bag import topics
 from mrs_nav.bag.io import bag_topics
 from mrs_nav.errors import BagError
 from mrs_nav.geometry import Pose2D
-from mrs_nav.occupancy_grid import OccupancyGrid
+from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.replay.golden import dump_json
 from mrs_nav.replay.map_compare import compare_maps
 from mrs_nav.replay.plan_replay import GoalPlan, replan_goals

@@ -20,8 +20,8 @@ from mrs_nav.bag.io import read_messages
 from mrs_nav.bag.messages import pose_from_odometry, scan_from_message, stamp_of
 from mrs_nav.errors import MrsNavError
 from mrs_nav.geometry import Pose2D, yaw_from_quaternion
-from mrs_nav.map_io import save_map
-from mrs_nav.occupancy_grid import OccupancyGrid
+from mrs_nav.maps.map_io import save_map
+from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.replay.pose_track import PoseTrack
 from mrs_nav.slam.config import SlamConfig
 from mrs_nav.slam.metrics import TrajectoryErrors, align_se2, trajectory_errors

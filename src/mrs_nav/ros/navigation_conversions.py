@@ -10,7 +10,7 @@ from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Path
 
 from mrs_nav.geometry import FloatArray, Pose2D
-from mrs_nav.occupancy_grid import OccupancyGrid
+from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.ros.conversions import pose_from_msg, pose_from_transform, pose_msg
 
 

@@ -1,5 +1,5 @@
 """The ``potential_field_navigation`` node: the course's potential-field follower on the robot, around
-:class:`mrs_nav.potential_field_follower.FieldFollower`.
+:class:`mrs_nav.fields.follower.FieldFollower`.
 
 Obstacles come from the world file (``~obstacles: world``) or from each ``scan`` (``~obstacles: scan``); the
 pose from ``ground_truth/odom`` (``~pose_source: ground_truth``) or tf ``~frame -> base_footprint``
@@ -16,7 +16,7 @@ import math
 import threading
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, TextIO
+from typing import TextIO
 
 import numpy as np
 import rospy
@@ -27,9 +27,11 @@ from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
 from mrs_nav.errors import InvalidInputError, MrsNavError
+from mrs_nav.fields.follower import FieldFollower, FieldFollowerConfig, scan_obstacles
 from mrs_nav.geometry import Pose2D
-from mrs_nav.obstacles import Obstacles
-from mrs_nav.potential_field_follower import FieldFollower, FieldFollowerConfig, scan_obstacles
+from mrs_nav.maps.obstacles import Obstacles
+from mrs_nav.maps.world import load_world
+from mrs_nav.robot import BURGER_MAX_ANGULAR, BURGER_MAX_LINEAR, BURGER_RADIUS
 from mrs_nav.ros.conversions import (
     laser_scan_arrays,
     pose_from_odometry,
@@ -37,7 +39,7 @@ from mrs_nav.ros.conversions import (
     valid_ranges,
 )
 from mrs_nav.ros.navigation_conversions import latest_pose, pose_in_frame
-from mrs_nav.world import load_world
+from mrs_nav.ros.params import private_param
 
 OBSTACLE_SOURCES = ("world", "scan")
 POSE_SOURCES = ("ground_truth", "tf")
@@ -74,33 +76,31 @@ class PotentialFieldNavigationConfig:
 
     @classmethod
     def from_params(cls) -> PotentialFieldNavigationConfig:
-        def get(name: str, default: Any) -> Any:
-            return rospy.get_param(f"~{name}", default)
-
-        gx, gy = float(get("goal_x", math.nan)), float(get("goal_y", math.nan))
-        world, trajectory = str(get("world", "")), str(get("trajectory_file", "/tmp/potential_field_trajectory.txt"))
-        seed = int(get("seed", -1))
+        gx, gy = private_param("goal_x", math.nan), private_param("goal_y", math.nan)
+        world = private_param("world", "")
+        trajectory = private_param("trajectory_file", "/tmp/potential_field_trajectory.txt")
+        seed = private_param("seed", -1)
         follower = FieldFollowerConfig(
-            epsilon=float(get("epsilon", 0.2)),
-            speed=float(get("speed", 0.2)),
-            robot_radius=float(get("robot_radius", 0.105)),
-            safety_margin=float(get("safety_margin", 0.05)),
-            goal_tolerance=float(get("goal_tolerance", 0.1)),
-            max_linear=float(get("max_linear", 0.22)),
-            max_angular=float(get("max_angular", 2.84)),
+            epsilon=private_param("epsilon", 0.2),
+            speed=private_param("speed", 0.2),
+            robot_radius=private_param("robot_radius", BURGER_RADIUS),
+            safety_margin=private_param("safety_margin", 0.05),
+            goal_tolerance=private_param("goal_tolerance", 0.1),
+            max_linear=private_param("max_linear", BURGER_MAX_LINEAR),
+            max_angular=private_param("max_angular", BURGER_MAX_ANGULAR),
         )
         return cls(
-            obstacles=str(get("obstacles", "world")),
+            obstacles=private_param("obstacles", "world"),
             world=Path(world) if world else None,
-            pose_source=str(get("pose_source", "ground_truth")),
-            frame=str(get("frame", "odom")),
-            base_frame=str(get("base_frame", "base_footprint")),
+            pose_source=private_param("pose_source", "ground_truth"),
+            frame=private_param("frame", "odom"),
+            base_frame=private_param("base_frame", "base_footprint"),
             goal=(gx, gy) if math.isfinite(gx) and math.isfinite(gy) else None,
-            rate_hz=float(get("rate", 10.0)),
-            pose_timeout_s=float(get("pose_timeout", 1.0)),
+            rate_hz=private_param("rate", 10.0),
+            pose_timeout_s=private_param("pose_timeout", 1.0),
             trajectory_file=Path(trajectory) if trajectory else None,
             seed=None if seed < 0 else seed,
-            heartbeat=bool(get("heartbeat", True)),
+            heartbeat=private_param("heartbeat", True),
             follower=follower,
         )
 

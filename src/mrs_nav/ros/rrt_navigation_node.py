@@ -1,5 +1,5 @@
 """The ``rrt_navigation`` node: RRT* to an rviz 2D Nav Goal on the live SLAM map, followed by feedback
-linearisation (the course's ``rrt_navigation.py``), around :class:`mrs_nav.navigator.Navigator`.
+linearisation (the course's ``rrt_navigation.py``), around :class:`mrs_nav.navigation.navigator.Navigator`.
 
 Subscribes ``map`` (nav_msgs/OccupancyGrid) and ``move_base_simple/goal`` (geometry_msgs/PoseStamped, any frame
 tf can bring into the map frame); reads the robot pose from tf ``map -> base_footprint``; publishes ``path``
@@ -21,7 +21,6 @@ import sys
 import threading
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import Any
 
 import rospy
 import tf2_ros
@@ -30,9 +29,10 @@ from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Path
 from std_msgs.msg import String
 
+from mrs_nav.control.path_following import FollowerConfig
 from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.geometry import Pose2D
-from mrs_nav.navigator import (
+from mrs_nav.navigation.navigator import (
     PLANNERS,
     EventKind,
     GoalState,
@@ -44,8 +44,9 @@ from mrs_nav.navigator import (
     PlanRequest,
     rrt_planner,
 )
-from mrs_nav.path_following import FollowerConfig
+from mrs_nav.robot import BURGER_MAX_ANGULAR, BURGER_MAX_LINEAR, BURGER_RADIUS
 from mrs_nav.ros.navigation_conversions import grid_from_msg, latest_pose, path_msg, pose_in_frame
+from mrs_nav.ros.params import private_param
 
 # The status word published with each event (the navigator's goal state after it).
 STATUS_OF_EVENT = {
@@ -88,42 +89,39 @@ class RrtNavigationConfig:
 
     @classmethod
     def from_params(cls) -> RrtNavigationConfig:
-        def get(name: str, default: Any) -> Any:
-            return rospy.get_param(f"~{name}", default)
-
         follower = FollowerConfig(
-            speed=float(get("speed", 0.2)),
-            epsilon=float(get("epsilon", 0.1)),
-            gain=float(get("gain", 2.0)),
-            max_linear=float(get("max_linear", 0.22)),
-            max_angular=float(get("max_angular", 2.84)),
+            speed=private_param("speed", 0.2),
+            epsilon=private_param("epsilon", 0.1),
+            gain=private_param("gain", 2.0),
+            max_linear=private_param("max_linear", BURGER_MAX_LINEAR),
+            max_angular=private_param("max_angular", BURGER_MAX_ANGULAR),
         )
         navigator = NavigatorConfig(
-            robot_radius=float(get("robot_radius", 0.105)),
-            safety_margin_m=float(get("safety_margin", 0.1)),
-            goal_tolerance_m=float(get("goal_tolerance", 0.2)),
-            allow_unknown=bool(get("allow_unknown", True)),
-            stray_distance_m=float(get("stray_distance", 0.3)),
-            replan_period_s=float(get("replan_period", 5.0)),
-            improvement_ratio=float(get("improvement_ratio", 0.85)),
-            max_failed_plans=int(get("max_failed_plans", 5)),
-            retry_delay_s=float(get("retry_delay", 1.0)),
-            progress_timeout_s=float(get("progress_timeout", 30.0)),
-            map_timeout_s=float(get("map_timeout", 0.0)),
+            robot_radius=private_param("robot_radius", BURGER_RADIUS),
+            safety_margin_m=private_param("safety_margin", 0.1),
+            goal_tolerance_m=private_param("goal_tolerance", 0.2),
+            allow_unknown=private_param("allow_unknown", True),
+            stray_distance_m=private_param("stray_distance", 0.3),
+            replan_period_s=private_param("replan_period", 5.0),
+            improvement_ratio=private_param("improvement_ratio", 0.85),
+            max_failed_plans=private_param("max_failed_plans", 5),
+            retry_delay_s=private_param("retry_delay", 1.0),
+            progress_timeout_s=private_param("progress_timeout", 30.0),
+            map_timeout_s=private_param("map_timeout", 0.0),
             follower=follower,
         )
-        seed = get("seed", -1)
+        seed = private_param("seed", -1)
         return cls(
-            planner=str(get("planner", "rrt_star")),
-            time_budget_s=float(get("time_budget", 0.3)),
-            rate_hz=float(get("rate", 10.0)),
-            pose_timeout_s=float(get("pose_timeout", 1.0)),
-            correction_timeout_s=float(get("correction_timeout", 5.0)),
-            map_frame=str(get("map_frame", "map")),
-            odom_frame=str(get("odom_frame", "odom")),
-            base_frame=str(get("base_frame", "base_footprint")),
-            seed=None if int(seed) < 0 else int(seed),
-            heartbeat=bool(get("heartbeat", True)),
+            planner=private_param("planner", "rrt_star"),
+            time_budget_s=private_param("time_budget", 0.3),
+            rate_hz=private_param("rate", 10.0),
+            pose_timeout_s=private_param("pose_timeout", 1.0),
+            correction_timeout_s=private_param("correction_timeout", 5.0),
+            map_frame=private_param("map_frame", "map"),
+            odom_frame=private_param("odom_frame", "odom"),
+            base_frame=private_param("base_frame", "base_footprint"),
+            seed=None if seed < 0 else seed,
+            heartbeat=private_param("heartbeat", True),
             navigator=navigator,
         )
 

@@ -38,6 +38,7 @@ from std_msgs.msg import UInt32
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
+from mrs_nav.maps.world import load_world
 from mrs_nav.ros.conversions import (
     clock_msg,
     joint_state_msg,
@@ -47,9 +48,9 @@ from mrs_nav.ros.conversions import (
     transform_stamped,
     twist_from_msg,
 )
+from mrs_nav.ros.params import private_param
 from mrs_nav.sim import LaserParams, LockstepConfig, LockstepGate, Simulator, SimulatorConfig, Twist2D
 from mrs_nav.sim.laser import Scan
-from mrs_nav.world import load_world
 
 WHEEL_JOINTS = ("wheel_left_joint", "wheel_right_joint")
 # When pacing falls this far behind (s of wall time), the lag is forgiven rather than caught up in a burst.
@@ -97,41 +98,38 @@ class SimulatorNodeConfig:
     def from_params(cls) -> SimulatorNodeConfig:
         """Read the ``~`` parameters (defaults as in config/simulator.yaml)."""
 
-        def get(name: str, default: Any) -> Any:
-            return rospy.get_param(f"~{name}", default)
-
-        world = str(get("world", ""))
+        world = private_param("world", "")
         if not world:
             raise InvalidInputError("~world: a world file is required")
         laser = LaserParams(
-            range_min=float(get("range_min", 0.12)),
-            range_max=float(get("range_max", 3.5)),
-            rate=float(get("scan_rate", 5.0)),
-            noise_sigma=float(get("scan_noise", 0.01)),
+            range_min=private_param("range_min", 0.12),
+            range_max=private_param("range_max", 3.5),
+            rate=private_param("scan_rate", 5.0),
+            noise_sigma=private_param("scan_noise", 0.01),
         )
         sim = SimulatorConfig(
             laser=laser,
-            physics_rate=float(get("physics_rate", 100.0)),
-            odom_noise=float(get("odom_noise", 0.0)),
-            seed=int(get("seed", 0)),
+            physics_rate=private_param("physics_rate", 100.0),
+            odom_noise=private_param("odom_noise", 0.0),
+            seed=private_param("seed", 0),
         )
         return cls(
             world=resolve_world(world),
-            start=Pose2D(float(get("x", 0.0)), float(get("y", 0.0)), float(get("yaw", 0.0))),
+            start=Pose2D(private_param("x", 0.0), private_param("y", 0.0), private_param("yaw", 0.0)),
             sim=sim,
-            real_time_factor=float(get("real_time_factor", 1.0)),
-            odom_rate=float(get("odom_rate", 50.0)),
-            clock_rate=float(get("clock_rate", 100.0)),
-            joint_states_rate=float(get("joint_states_rate", 10.0)),
-            odom_frame=str(get("odom_frame", "odom")),
-            base_frame=str(get("base_frame", "base_footprint")),
-            scan_frame=str(get("scan_frame", "base_scan")),
-            ground_truth_frame=str(get("ground_truth_frame", "world")),
-            publish_tf=bool(get("publish_tf", True)),
+            real_time_factor=private_param("real_time_factor", 1.0),
+            odom_rate=private_param("odom_rate", 50.0),
+            clock_rate=private_param("clock_rate", 100.0),
+            joint_states_rate=private_param("joint_states_rate", 10.0),
+            odom_frame=private_param("odom_frame", "odom"),
+            base_frame=private_param("base_frame", "base_footprint"),
+            scan_frame=private_param("scan_frame", "base_scan"),
+            ground_truth_frame=private_param("ground_truth_frame", "world"),
+            publish_tf=private_param("publish_tf", True),
             lockstep=LockstepConfig(
-                period=float(get("lockstep_period", 0.1)), timeout=float(get("lockstep_timeout", 1.0))
+                period=private_param("lockstep_period", 0.1), timeout=private_param("lockstep_timeout", 1.0)
             )
-            if bool(get("lockstep", False))
+            if private_param("lockstep", False)
             else None,
         )
 

@@ -28,6 +28,7 @@ from sensor_msgs.msg import LaserScan
 from mrs_nav.errors import MrsNavError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.ros.conversions import pose_from_transform, pose_msg, transform_stamped
+from mrs_nav.ros.params import private_param
 from mrs_nav.slam import LaserScanData, Slam, SlamConfig
 
 # Parameters of SlamConfig the node reads (gmapping's names where gmapping has them).
@@ -52,11 +53,11 @@ class SlamNodeConfig:
         values = {name: rospy.get_param(f"~{name}") for name in _SLAM_PARAMS if rospy.has_param(f"~{name}")}
         return cls(
             slam=SlamConfig.from_mapping(values),
-            base_frame=str(rospy.get_param("~base_frame", "base_footprint")),
-            odom_frame=str(rospy.get_param("~odom_frame", "odom")),
-            map_frame=str(rospy.get_param("~map_frame", "map")),
-            transform_publish_period=float(rospy.get_param("~transform_publish_period", 0.05)),
-            tf_wait=float(rospy.get_param("~tf_wait", 0.2)),
+            base_frame=private_param("base_frame", "base_footprint"),
+            odom_frame=private_param("odom_frame", "odom"),
+            map_frame=private_param("map_frame", "map"),
+            transform_publish_period=private_param("transform_publish_period", 0.05),
+            tf_wait=private_param("tf_wait", 0.2),
         )
 
 

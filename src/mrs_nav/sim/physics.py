@@ -25,6 +25,7 @@ import ode
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
+from mrs_nav.maps.world import World
 from mrs_nav.sim.ode_bindings import (
     CONTACT_APPROX1,
     CONTACT_SOFT_CFM,
@@ -34,7 +35,6 @@ from mrs_nav.sim.ode_bindings import (
     collide_spaces,
 )
 from mrs_nav.sim.robot import BurgerParams
-from mrs_nav.world import World
 
 GRAVITY = 9.81  # m/s^2
 _CONTACT_ERP = 0.8

@@ -18,6 +18,7 @@ import math
 from dataclasses import dataclass, fields
 
 from mrs_nav.errors import InvalidInputError
+from mrs_nav.robot import BURGER_MAX_ANGULAR, BURGER_MAX_LINEAR, BURGER_RADIUS
 
 
 @dataclass(frozen=True)
@@ -27,7 +28,7 @@ class BurgerParams:
     wheel_radius: float = 0.033
     wheel_separation: float = 0.160
     wheel_width: float = 0.018
-    footprint_radius: float = 0.105
+    footprint_radius: float = BURGER_RADIUS
     # The chassis is a vertical cylinder of the footprint radius around base_footprint, clear of the ground
     # so that only the wheels and the caster touch it.
     chassis_clearance: float = 0.015
@@ -39,8 +40,8 @@ class BurgerParams:
     wheel_mass: float = 0.05
     caster_x: float = -0.081
     caster_radius: float = 0.01
-    max_linear_speed: float = 0.22
-    max_angular_speed: float = 2.84
+    max_linear_speed: float = BURGER_MAX_LINEAR
+    max_angular_speed: float = BURGER_MAX_ANGULAR
     max_linear_accel: float = 1.0
     max_angular_accel: float = 6.0
     # Torque limit of each wheel's velocity motor (N m): ample for 1 m/s^2 on 1 kg, bounded so that pushing

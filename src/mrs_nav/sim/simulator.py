@@ -20,12 +20,12 @@ import numpy as np
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D, wrap_angle
+from mrs_nav.maps.world import World
 from mrs_nav.sim.commands import CommandLimiter, Twist2D
 from mrs_nav.sim.laser import Laser, LaserParams, Scan
 from mrs_nav.sim.odometry import Odometry, WheelOdometry
 from mrs_nav.sim.physics import Physics, WheelState
 from mrs_nav.sim.robot import BurgerParams
-from mrs_nav.world import World
 
 
 @dataclass(frozen=True)

@@ -84,6 +84,17 @@ class SlamConfig:
             raise InvalidInputError(f"SLAM map extent is empty: x {self.xmin}..{self.xmax}, y {self.ymin}..{self.ymax}")
 
     @classmethod
+    def from_assignments(cls, items: list[builtins.str]) -> SlamConfig:
+        """``["name=value", ...]`` (``mrs-nav replay --param``) into a validated config."""
+        values: dict[builtins.str, builtins.str] = {}
+        for item in items:
+            name, sep, value = item.partition("=")
+            if not sep or not name.strip():
+                raise InvalidInputError(f"--param: expected NAME=VALUE, got {item!r}")
+            values[name.strip()] = value.strip()
+        return cls.from_mapping(values)
+
+    @classmethod
     def from_mapping(cls, values: dict[builtins.str, Any]) -> SlamConfig:
         """Build a config from ``{name: value}`` (e.g. ROS params), rejecting unknown names and bad types."""
         known = {f.name: f for f in dataclasses.fields(cls)}

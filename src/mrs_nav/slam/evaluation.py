@@ -1,7 +1,7 @@
 """Map quality against a known world: the world rasterised on the map's grid, and intersection over union.
 
 A cell is occupied in the world when its square reaches into an obstacle footprint
-(:func:`mrs_nav.rasterize.rasterize_world`, the rule the planners use). The IoU of occupied cells is taken over
+(:func:`mrs_nav.maps.rasterize.rasterize_world`, the rule the planners use). The IoU of occupied cells is taken over
 the cells the map has observed (free or occupied), since a map cannot be blamed for what its laser never saw
 (wall interiors).
 """
@@ -15,9 +15,9 @@ import numpy as np
 import numpy.typing as npt
 from scipy import ndimage
 
-from mrs_nav.rasterize import rasterize_world
+from mrs_nav.maps.rasterize import rasterize_world
+from mrs_nav.maps.world import World
 from mrs_nav.slam.grid import LogOddsGrid
-from mrs_nav.world import World
 
 BoolArray = npt.NDArray[np.bool_]
 

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from mrs_nav.errors import InvalidInputError
-from mrs_nav.occupancy_grid import OccupancyGrid
+from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.replay.map_compare import compare_maps
 
 RES = 0.05

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from mrs_nav.geometry import FloatArray, Pose2D
+from mrs_nav.maps.world import load_world
 from mrs_nav.sim import LaserParams, Simulator, SimulatorConfig
-from mrs_nav.world import load_world
 
 ARENA = Path(__file__).resolve().parents[3] / "worlds" / "simple.world"
 HALF = 2.0  # inner wall faces at +-2 m

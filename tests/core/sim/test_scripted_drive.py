@@ -9,9 +9,9 @@ import pytest
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
+from mrs_nav.maps.world import load_world
 from mrs_nav.sim import LaserParams, Simulator, SimulatorConfig
 from mrs_nav.sim.scripted_drive import OFFICE_CORRIDOR_LOOP, WaypointDriver
-from mrs_nav.world import load_world
 
 OFFICE = Path(__file__).resolve().parents[3] / "worlds" / "office.world"
 

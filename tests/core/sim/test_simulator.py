@@ -10,8 +10,8 @@ import pytest
 
 from mrs_nav.errors import InvalidInputError, WorldFileError
 from mrs_nav.geometry import Pose2D, wrap_angle
+from mrs_nav.maps.world import World, load_world
 from mrs_nav.sim import LaserParams, Simulator, SimulatorConfig
-from mrs_nav.world import World, load_world
 
 START = Pose2D(-1.5, -1.5, 0.0)
 

@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 
 from mrs_nav.geometry import Pose2D
+from mrs_nav.maps.world import load_world
 from mrs_nav.sim import Simulator
-from mrs_nav.world import load_world
 
 WORLDS = Path(__file__).resolve().parents[3] / "worlds"
 

@@ -1,0 +1,229 @@
+"""Potential-field planning with randomised escapes (assignment 1.1, parts 1d-1f).
+
+The point moves by explicit Euler steps ``x[t + dt] = x[t] + v dt`` in one of two modes:
+
+- **best first** (gradient descent): ``v = cap(V_a(x) + w + V_r(x))`` with ``w ~ N(0, sigma^2 I)`` Gaussian
+  noise on the attractive part. The noise is the fix (1e) for the saddle point in front of an obstacle lying
+  on the straight line to the goal: there the field points exactly at the goal and only a perturbation
+  across the line lets the descent slide off.
+- **random walk** (1f): entered at a local minimum, recognised as a field weaker than ``stall_speed`` while
+  the goal is farther than ``stall_distance`` (closer in, a weak field just means the goal is near). The
+  point moves at ``V_max`` along a heading that follows a Markov chain
+  ``theta[t + dt] ~ N(theta[t], walk_angle_std^2)`` (``walk_angle_std = pi`` as in the assignment). It
+  returns to best first when the step it just took goes down the potential, i.e. has a positive component
+  along the field, ``(x[t + dt] - x[t]) . V(x[t + dt]) > 0``; that test starts only after ``min_walk_steps``
+  steps, so that one lucky step does not drop the point straight back into the basin it is leaving.
+
+Steps that would enter an obstacle are refused (the point stays and, in a walk, draws a new heading), so
+the trajectory never crosses an obstacle even where the random walk's speed exceeds the field's.
+
+Each seed owns a ``numpy.random.Generator``; its draws are made up front, so a batch of seeds simulated
+together (vectorised over seeds, as the tests and the benchmark do) gives exactly the trajectories of the
+seeds run one by one.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from mrs_nav.errors import InvalidInputError
+from mrs_nav.fields.path_simplification import simplify_path
+from mrs_nav.fields.potential_field import PotentialField, cap
+from mrs_nav.geometry import FloatArray
+from mrs_nav.maps.obstacles import BoolArray
+from mrs_nav.planning import PlanResult, headings_along, path_length
+
+REACHED = "goal reached"
+
+
+@dataclass(frozen=True)
+class EscapeSettings:
+    """Integration and escape parameters.
+
+    ``dt`` (s) Euler step; ``max_steps`` step budget; ``goal_tolerance`` (m) success radius; ``noise_std``
+    (m/s) standard deviation of the attractive-field noise (0 turns the 1e fix off); ``random_walk`` turns
+    the 1f escape on; ``stall_speed`` (m/s) and ``stall_distance`` (m) define a local minimum; ``stall_steps``
+    how many stalled steps end a plan when the random walk is off; ``min_walk_steps`` the shortest walk;
+    ``walk_angle_std`` (rad) the heading noise of the walk.
+    """
+
+    dt: float = 0.01
+    max_steps: int = 10000
+    goal_tolerance: float = 0.05
+    noise_std: float = 0.05
+    random_walk: bool = True
+    stall_speed: float = 0.05
+    stall_distance: float = 0.2
+    stall_steps: int = 300
+    min_walk_steps: int = 20
+    walk_angle_std: float = math.pi
+
+    def __post_init__(self) -> None:
+        for name in ("dt", "goal_tolerance", "noise_std", "stall_speed", "stall_distance", "walk_angle_std"):
+            value = getattr(self, name)
+            if not math.isfinite(value) or value < 0.0 or (name == "dt" and value == 0.0):
+                raise InvalidInputError(
+                    f"{name} must be a finite number {'> 0' if name == 'dt' else '>= 0'}, got {value}"
+                )
+        for name in ("max_steps", "stall_steps", "min_walk_steps"):
+            value = getattr(self, name)
+            if value < (0 if name == "min_walk_steps" else 1):
+                raise InvalidInputError(f"{name} must be {'>= 0' if name == 'min_walk_steps' else '>= 1'}, got {value}")
+
+
+@dataclass(frozen=True)
+class Rollout:
+    """One seed's trajectory ``(K, 2)`` (not simplified), whether it reached the goal and why it stopped.
+
+    ``walking[k]`` tells whether step ``k -> k + 1`` was a random-walk step (``(K - 1,)`` booleans).
+    """
+
+    seed: int
+    trajectory: FloatArray
+    walking: BoolArray
+    success: bool
+    reason: str
+    steps: int
+    walk_steps: int
+
+
+def roll_out(
+    field: PotentialField,
+    start: tuple[float, float],
+    seeds: Sequence[int],
+    settings: EscapeSettings = EscapeSettings(),
+) -> list[Rollout]:
+    """Simulate the randomised descent from ``start`` once per seed, vectorised over the seeds."""
+    s = settings
+    if any(seed < 0 for seed in seeds):
+        raise InvalidInputError(f"seeds must be >= 0, got {min(seeds)}")
+    start_xy = np.asarray(start, dtype=np.float64)
+    if field.obstacles.contains(start_xy)[0]:
+        raise InvalidInputError(f"start ({start[0]}, {start[1]}) is inside an obstacle")
+    n = len(seeds)
+    noise = np.empty((s.max_steps, n, 2))
+    turns = np.empty((s.max_steps, n))
+    heading = np.empty(n)
+    for i, seed in enumerate(seeds):
+        rng = np.random.default_rng(seed)
+        heading[i] = rng.uniform(-math.pi, math.pi)
+        noise[:, i] = rng.normal(0.0, s.noise_std, (s.max_steps, 2)) if s.noise_std > 0 else 0.0
+        turns[:, i] = rng.normal(0.0, s.walk_angle_std, s.max_steps)
+
+    goal = np.asarray(field.goal, dtype=np.float64)
+    path = np.empty((s.max_steps + 1, n, 2))
+    path[0] = start_xy
+    walked = np.zeros((s.max_steps, n), dtype=bool)
+    x = np.repeat(start_xy[None, :], n, axis=0)
+    active = np.hypot(*(x - goal).T) > s.goal_tolerance
+    finished = np.where(active, -1, 0)
+    walking = np.zeros(n, dtype=bool)
+    walk_age = np.zeros(n, dtype=np.int64)
+    slow_for = np.zeros(n, dtype=np.int64)
+    reasons = ["" if a else REACHED for a in active]
+
+    for k in range(s.max_steps):
+        if not active.any():
+            break
+        idx = np.flatnonzero(active)
+        here = x[idx]
+        uncapped = field.attractive(here) + field.repulsive(here)
+        clean = cap(uncapped, field.max_speed)
+        stalled = (np.hypot(clean[:, 0], clean[:, 1]) < s.stall_speed) & (np.hypot(*(here - goal).T) > s.stall_distance)
+        slow_for[idx] = np.where(stalled, slow_for[idx] + 1, 0)
+        if s.random_walk:
+            start_walk = stalled & ~walking[idx]
+            walking[idx[start_walk]] = True
+            walk_age[idx[start_walk]] = 0
+        walk = walking[idx]
+        heading[idx[walk]] += turns[k, idx[walk]]
+        v = cap(uncapped + noise[k, idx], field.max_speed) if s.noise_std > 0 else clean
+        v[walk] = field.v_max * np.column_stack([np.cos(heading[idx[walk]]), np.sin(heading[idx[walk]])])
+        proposed = here + s.dt * v
+        ok = field.obstacles.segments_free(here, proposed)
+        new = np.where(ok[:, None], proposed, here)
+        x[idx] = new
+        path[k + 1] = x
+
+        walked[k, idx[walk]] = True
+        walk_age[idx[walk]] += 1
+        if walk.any():
+            moved = new[walk] - here[walk]
+            downhill = np.einsum("ij,ij->i", moved, field.velocity(new[walk])) > 0.0
+            leave = downhill & (walk_age[idx[walk]] > s.min_walk_steps)
+            walking[idx[walk][leave]] = False
+
+        arrived = np.hypot(*(new - goal).T) <= s.goal_tolerance
+        for j in idx[arrived]:
+            reasons[j] = REACHED
+        stuck = ~arrived & (slow_for[idx] >= s.stall_steps) & (not s.random_walk)
+        for j in idx[stuck]:
+            reasons[j] = (
+                f"stalled at ({x[j, 0]:.3f}, {x[j, 1]:.3f}): the field vanishes away from the goal "
+                "(saddle point or local minimum)"
+            )
+        done = arrived | stuck
+        finished[idx[done]] = k + 1
+        active[idx[done]] = False
+
+    results = []
+    for i, seed in enumerate(seeds):
+        steps = int(finished[i]) if finished[i] >= 0 else s.max_steps
+        reason = reasons[i] or f"step budget used up ({s.max_steps} steps of {s.dt} s) before reaching the goal"
+        results.append(
+            Rollout(
+                int(seed),
+                path[: steps + 1, i].copy(),
+                walked[:steps, i].copy(),
+                reason == REACHED,
+                reason,
+                steps,
+                int(walked[:steps, i].sum()),
+            )
+        )
+    return results
+
+
+def planned_points(field: PotentialField, rollout: Rollout, *, simplify: bool = True) -> FloatArray:
+    """The ``(K, 2)`` waypoints a plan hands on: the rollout's trajectory, ended on the goal when it succeeded
+    (the descent stops ``goal_tolerance`` short of it), then simplified against the field's obstacles."""
+    points = rollout.trajectory
+    goal = np.asarray(field.goal, dtype=np.float64)
+    if rollout.success and field.obstacles.segments_free(points[-1:], goal[None, :])[0]:
+        points = np.vstack([points, goal])
+    return simplify_path(points, field.obstacles.segments_free) if simplify else points
+
+
+def plan_potential_field(
+    field: PotentialField,
+    start: tuple[float, float, float],
+    seed: int,
+    settings: EscapeSettings = EscapeSettings(),
+    *,
+    simplify: bool = True,
+) -> PlanResult:
+    """One potential-field plan from ``start`` ``(x, y, yaw)`` to the field's goal.
+
+    The waypoints are :func:`planned_points` of the rollout, each with the heading of the segment leaving it;
+    the first keeps the start's yaw and the last the heading of the segment reaching it.
+    """
+    began = time.perf_counter()
+    (rollout,) = roll_out(field, (start[0], start[1]), [seed], settings)
+    path = headings_along(planned_points(field, rollout, simplify=simplify))
+    path[0, 2] = start[2]
+    elapsed = time.perf_counter() - began
+    return PlanResult(
+        success=rollout.success,
+        path=path,
+        length_m=path_length(path),
+        time_s=elapsed,
+        first_solution_s=elapsed if rollout.success else None,
+        iterations=rollout.steps,
+        nodes=int(path.shape[0]),
+        reason=rollout.reason,
+    )

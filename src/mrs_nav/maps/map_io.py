@@ -1,0 +1,166 @@
+"""map_server map files: a ``.yaml`` description plus a ``.pgm`` image, read and written.
+
+Reading follows map_server: the image's top row is the largest y; a pixel's occupancy is
+``p = (255 - v) / 255`` (``p = v / 255`` when ``negate`` is 1), scaled to the image's maxval. In ``trinary``
+mode (the default) ``p > occupied_thresh`` gives 100, ``p < free_thresh`` gives 0, anything else -1 (unknown);
+``scale`` mode keeps ``99 * (p - free_thresh) / (occupied_thresh - free_thresh)`` between the thresholds;
+``raw`` mode takes the pixel value as the cell value. Writing follows map_saver: free 254, occupied 0,
+unknown 205, with ``occupied_thresh 0.65`` and ``free_thresh 0.196``, so that a saved trinary grid reads back
+identical. Only PGM images (binary P5 or ASCII P2) are read.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+import yaml
+
+from mrs_nav.errors import InvalidInputError, MapFileError
+from mrs_nav.maps.occupancy_grid import FREE_MAX, OCCUPIED, OCCUPIED_MIN, UNKNOWN, OccupancyGrid
+
+_SAVE_FREE, _SAVE_OCCUPIED, _SAVE_UNKNOWN = 254, 0, 205
+_MODES = ("trinary", "scale", "raw")
+
+
+def _number(meta: dict[str, Any], key: str, where: Path, default: float | None = None) -> float:
+    if key not in meta:
+        if default is None:
+            raise MapFileError(f"{where}: missing key {key!r}")
+        return default
+    value = meta[key]
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise MapFileError(f"{where}: {key} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def read_pgm(path: Path) -> npt.NDArray[np.int32]:
+    """Pixels of a PGM image (P5 binary or P2 ASCII, maxval up to 65535) as ``(rows, cols)`` ints, top row first.
+
+    The array is scaled to 0..255 when maxval differs from 255.
+    """
+    try:
+        data = path.read_bytes()
+    except OSError as err:
+        raise MapFileError(f"{path}: cannot read map image: {err.strerror or err}") from err
+    # Header: magic, width, height, maxval, separated by whitespace, with # comments; one whitespace byte ends it.
+    header = re.match(rb"(P[25])((?:\s+|#[^\n]*\n)+)(\d+)((?:\s+|#[^\n]*\n)+)(\d+)((?:\s+|#[^\n]*\n)+)(\d+)\s", data)
+    if header is None:
+        raise MapFileError(f"{path}: not a PGM image (expected a P5 or P2 header)")
+    magic, width, height, maxval = header.group(1), int(header.group(3)), int(header.group(5)), int(header.group(7))
+    if width < 1 or height < 1 or not 0 < maxval < 65536:
+        raise MapFileError(f"{path}: bad PGM size {width}x{height} or maxval {maxval}")
+    body = data[header.end() :]
+    count = width * height
+    if magic == b"P5":
+        dtype = np.dtype(">u2") if maxval > 255 else np.dtype(np.uint8)
+        if len(body) < count * dtype.itemsize:
+            raise MapFileError(
+                f"{path}: PGM is truncated: {len(body)} bytes of pixels, expected {count * dtype.itemsize}"
+            )
+        pixels = np.frombuffer(body, dtype=dtype, count=count).astype(np.int32)
+    else:
+        try:
+            pixels = np.array(body.split(), dtype=np.int32)
+        except ValueError:
+            raise MapFileError(f"{path}: PGM (P2) pixels must be integers") from None
+        if pixels.size != count:
+            raise MapFileError(f"{path}: PGM has {pixels.size} pixels, expected {count}")
+    if np.any(pixels > maxval):
+        raise MapFileError(f"{path}: PGM pixel values exceed maxval {maxval}")
+    if maxval != 255:
+        pixels = np.rint(pixels * (255.0 / maxval)).astype(np.int32)
+    return pixels.reshape(height, width)
+
+
+def _parse_yaml(path: Path) -> dict[str, Any]:
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as err:
+        raise MapFileError(f"{path}: cannot read map description: {err}") from err
+    try:
+        meta = yaml.safe_load(text)
+    except yaml.YAMLError as err:
+        raise MapFileError(f"{path}: malformed YAML: {' '.join(str(err).split())}") from err
+    if not isinstance(meta, dict):
+        raise MapFileError(f"{path}: expected a YAML mapping with image, resolution and origin")
+    return meta
+
+
+def load_map(path: str | Path) -> OccupancyGrid:
+    """Load a map_server map from its ``.yaml`` file; errors name the file."""
+    path = Path(path)
+    meta = _parse_yaml(path)
+    image = meta.get("image")
+    if not isinstance(image, str) or not image:
+        raise MapFileError(f"{path}: missing or empty key 'image'")
+    resolution = _number(meta, "resolution", path)
+    if resolution <= 0.0:
+        raise MapFileError(f"{path}: resolution must be positive, got {resolution}")
+    origin = meta.get("origin")
+    if (
+        not isinstance(origin, list)
+        or len(origin) != 3
+        or not all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in origin)
+    ):
+        raise MapFileError(f"{path}: origin must be a list of three finite numbers [x, y, yaw], got {origin!r}")
+    negate = meta.get("negate", 0)
+    if negate not in (0, 1) or isinstance(negate, float):
+        raise MapFileError(f"{path}: negate must be 0 or 1, got {negate!r}")
+    occupied_thresh = _number(meta, "occupied_thresh", path, 0.65)
+    free_thresh = _number(meta, "free_thresh", path, 0.196)
+    if not 0.0 <= free_thresh <= occupied_thresh <= 1.0:
+        raise MapFileError(
+            f"{path}: need 0 <= free_thresh <= occupied_thresh <= 1, got {free_thresh}, {occupied_thresh}"
+        )
+    mode = meta.get("mode", "trinary")
+    if mode not in _MODES:
+        raise MapFileError(f"{path}: mode must be one of {', '.join(_MODES)}, got {mode!r}")
+    image_path = Path(image) if Path(image).is_absolute() else path.parent / image
+    pixels = read_pgm(image_path)[::-1]  # image top row is the largest y; grid row 0 is the smallest
+    if mode == "raw":
+        values = np.where(pixels > OCCUPIED, UNKNOWN, pixels)
+    else:
+        p = pixels / 255.0 if negate else (255 - pixels) / 255.0
+        values = np.full(pixels.shape, UNKNOWN, dtype=np.int32)
+        values[p > occupied_thresh] = OCCUPIED
+        values[p < free_thresh] = 0
+        if mode == "scale" and occupied_thresh > free_thresh:
+            between = (p >= free_thresh) & (p <= occupied_thresh)
+            values[between] = np.rint(99.0 * (p[between] - free_thresh) / (occupied_thresh - free_thresh))
+    try:
+        return OccupancyGrid(values.astype(np.int8), resolution, (float(origin[0]), float(origin[1]), float(origin[2])))
+    except InvalidInputError as err:
+        raise MapFileError(f"{path}: {err}") from err
+
+
+def save_map(grid: OccupancyGrid, path: str | Path) -> Path:
+    """Write ``grid`` as map_server files: ``path`` (``.yaml``) and the ``.pgm`` beside it; returns the yaml path.
+
+    Cells at or above 65 are written occupied, 0..19 free, the rest unknown (map_saver's convention).
+    """
+    path = Path(path)
+    if path.suffix != ".yaml":
+        raise InvalidInputError(f"{path}: a map description must end in .yaml")
+    image_path = path.with_suffix(".pgm")
+    pixels = np.full(grid.values.shape, _SAVE_UNKNOWN, dtype=np.uint8)
+    pixels[(grid.values >= 0) & (grid.values <= FREE_MAX)] = _SAVE_FREE
+    pixels[grid.values >= OCCUPIED_MIN] = _SAVE_OCCUPIED
+    header = f"P5\n# CREATOR: mrs_nav {grid.resolution:.3f} m/pix\n{grid.width} {grid.height}\n255\n".encode()
+    meta = (
+        f"image: {image_path.name}\n"
+        f"resolution: {grid.resolution!r}\n"
+        f"origin: [{grid.origin[0]!r}, {grid.origin[1]!r}, {grid.origin[2]!r}]\n"
+        "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\nmode: trinary\n"
+    )
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        image_path.write_bytes(header + pixels[::-1].tobytes())
+        path.write_text(meta, encoding="utf-8")
+    except OSError as err:
+        raise MapFileError(f"{path}: cannot write map: {err.strerror or err}") from err
+    return path

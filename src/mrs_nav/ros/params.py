@@ -1,0 +1,44 @@
+"""Reading a node's private (``~``) parameters, the one place every node does it.
+
+``private_param("rate", 10.0)`` returns ``~rate`` converted to the type of its default (bool, int, float or
+str), or the default when the parameter is not set. A value of the wrong kind (``rate: "fast"``, a float for an
+int, anything but a bool for a bool) raises :class:`InvalidInputError` naming the parameter, so a node stops at
+start-up with one line instead of carrying a bad value. Ranges are checked by the core configs themselves.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, TypeVar
+
+import rospy
+
+from mrs_nav.errors import InvalidInputError
+
+T = TypeVar("T", bool, int, float, str)
+
+
+def _convert(name: str, value: Any, default: T) -> T:
+    kind = type(default)
+    if kind is bool:
+        if isinstance(value, bool):
+            return value
+    elif kind is int:
+        if isinstance(value, int) and not isinstance(value, bool):
+            return value
+    elif kind is float:
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            result = float(value)
+            if math.isnan(result) and not math.isnan(default):
+                raise InvalidInputError(f"~{name}: expected a number, got NaN")
+            return result
+    elif isinstance(value, str):
+        return value
+    raise InvalidInputError(f"~{name}: expected {kind.__name__}, got {value!r}")
+
+
+def private_param(name: str, default: T) -> T:
+    """``~name`` of the calling node as the type of ``default`` (``default`` itself when unset)."""
+    if not rospy.has_param(f"~{name}"):
+        return default
+    return _convert(name, rospy.get_param(f"~{name}"), default)

@@ -1,0 +1,1 @@
+"""Tree planners with circular-arc edges (assignment 3): arcs, the tree, RRT and RRT*."""

@@ -1,0 +1,118 @@
+"""map_server files: reading (thresholds, negate, modes, P2/P5), writing, round trips, and clear errors."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mrs_nav.errors import MapFileError
+from mrs_nav.maps.map_io import load_map, save_map
+from mrs_nav.maps.occupancy_grid import OCCUPIED, UNKNOWN, OccupancyGrid
+from mrs_nav.maps.rasterize import rasterize_world
+from mrs_nav.maps.world import load_world
+
+REPO = Path(__file__).resolve().parents[3]
+
+
+def _write(tmp_path: Path, yaml_text: str, pgm: bytes, name: str = "m") -> Path:
+    (tmp_path / f"{name}.pgm").write_bytes(pgm)
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(yaml_text)
+    return path
+
+
+def test_round_trip_of_a_non_square_map_keeps_values_resolution_and_origin(tmp_path: Path) -> None:
+    rng = np.random.default_rng(3)
+    values = rng.choice(np.array([0, OCCUPIED, UNKNOWN], dtype=np.int8), size=(7, 13))
+    grid = OccupancyGrid(values, 0.025, (-3.25, 1.5, 0.1))
+    first = load_map(save_map(grid, tmp_path / "a.yaml"))
+    second = load_map(save_map(first, tmp_path / "b.yaml"))
+    for loaded in (first, second):
+        assert np.array_equal(loaded.values, values)
+        assert loaded.resolution == 0.025
+        assert loaded.origin == (-3.25, 1.5, 0.1)
+
+
+def test_image_top_row_is_the_largest_y_and_thresholds_apply(tmp_path: Path) -> None:
+    # 2 x 2 image: top row (y = 1) [black, white], bottom row (y = 0) [grey 205, grey 100]
+    pgm = b"P5\n2 2\n255\n" + bytes([0, 254, 205, 100])
+    path = _write(
+        tmp_path,
+        "image: m.pgm\nresolution: 1.0\norigin: [0, 0, 0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n",
+        pgm,
+    )
+    grid = load_map(path)
+    # p = (255 - v) / 255: 205 -> 0.196 (unknown), 100 -> 0.61 (unknown), 0 -> 1 (occupied), 254 -> free
+    assert grid.values.tolist() == [[UNKNOWN, UNKNOWN], [OCCUPIED, 0]]
+
+
+def test_negate_scale_mode_and_ascii_pgm(tmp_path: Path) -> None:
+    pgm = b"P2\n# comment\n3 1\n255\n0 128 255\n"
+    path = _write(
+        tmp_path,
+        "image: m.pgm\nresolution: 0.1\norigin: [1, 2, 0]\nnegate: 1\nmode: scale\n"
+        "occupied_thresh: 0.65\nfree_thresh: 0.196\n",
+        pgm,
+    )
+    grid = load_map(path)
+    # negate: p = v / 255 -> 0 free, 0.502 scaled to 99 (0.502 - 0.196) / 0.454 = 67, 1.0 occupied
+    assert grid.values.tolist() == [[0, 67, OCCUPIED]]
+
+
+def test_shipped_course_map_is_what_the_rasteriser_makes_now() -> None:
+    shipped = load_map(REPO / "maps" / "simple.yaml")
+    made = rasterize_world(load_world(REPO / "worlds" / "simple.world"), 0.05)
+    assert np.array_equal(shipped.values, made.values), (
+        "regenerate: python -m mrs_nav.maps.rasterize worlds/simple.world maps/simple.yaml"
+    )
+    assert shipped.origin == pytest.approx(made.origin)
+    assert shipped.resolution == made.resolution
+    # the inner faces of the walls at +-2 m and the cylinder r = 0.3 at (0.3, 0.2)
+    assert shipped.is_free([[1.97, 0.0], [-1.97, 0.0], [0.0, 1.97], [0.3, 0.54]]).all()
+    assert shipped.is_occupied([[2.03, 0.0], [0.0, -2.03], [0.3, 0.2], [0.3, 0.48], [0.58, 0.2]]).all()
+
+
+@pytest.mark.parametrize(
+    ("yaml_text", "message"),
+    [
+        ("image: m.pgm\nresolution: [0.05\n", "malformed YAML"),
+        ("- just\n- a list\n", "expected a YAML mapping"),
+        ("resolution: 0.05\norigin: [0, 0, 0]\n", "missing or empty key 'image'"),
+        ("image: m.pgm\norigin: [0, 0, 0]\n", "missing key 'resolution'"),
+        ("image: m.pgm\nresolution: -1\norigin: [0, 0, 0]\n", "resolution must be positive"),
+        ("image: m.pgm\nresolution: 0.05\norigin: [0, 0]\n", "origin must be a list of three"),
+        ("image: m.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nnegate: 2\n", "negate must be 0 or 1"),
+        ("image: m.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nmode: fancy\n", "mode must be one of"),
+        ("image: m.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nfree_thresh: 0.9\n", "free_thresh <= occupied_thresh"),
+        ("image: other.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n", "other.pgm: cannot read map image"),
+    ],
+)
+def test_malformed_yaml_names_the_file_and_the_problem(tmp_path: Path, yaml_text: str, message: str) -> None:
+    path = _write(tmp_path, yaml_text, b"P5\n1 1\n255\n\x00")
+    with pytest.raises(MapFileError, match=message) as info:
+        load_map(path)
+    assert str(tmp_path) in str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("pgm", "message"),
+    [
+        (b"P6\n1 1\n255\n\x00\x00\x00", "not a PGM image"),
+        (b"P5\n4 4\n255\n\x00\x00", "truncated"),
+        (b"P2\n2 1\n255\n0 x\n", "must be integers"),
+        (b"P2\n2 1\n100\n0 200\n", "exceed maxval"),
+        (b"", "not a PGM image"),
+    ],
+)
+def test_malformed_pgm_names_the_image(tmp_path: Path, pgm: bytes, message: str) -> None:
+    path = _write(tmp_path, "image: m.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n", pgm)
+    with pytest.raises(MapFileError, match=message) as info:
+        load_map(path)
+    assert "m.pgm" in str(info.value)
+
+
+def test_missing_yaml_is_a_clear_error(tmp_path: Path) -> None:
+    with pytest.raises(MapFileError, match=r"nope\.yaml: cannot read map description"):
+        load_map(tmp_path / "nope.yaml")

@@ -1,0 +1,413 @@
+"""The navigation state machine, driven directly with occupancy grids and a kinematic robot."""
+
+from __future__ import annotations
+
+import heapq
+import math
+import time
+
+import numpy as np
+import pytest
+
+from mrs_nav.errors import InvalidInputError, NoPathFoundError
+from mrs_nav.geometry import Pose2D
+from mrs_nav.maps.occupancy_grid import OCCUPIED, UNKNOWN, OccupancyGrid
+from mrs_nav.navigation.navigator import (
+    EventKind,
+    GoalState,
+    NavCommand,
+    Navigator,
+    NavigatorConfig,
+    cell_centres,
+    densify,
+)
+from mrs_nav.planning import PlanResult, headings_along, path_length
+
+RES = 0.05
+
+
+def arena(unknown: bool = False) -> OccupancyGrid:
+    """A 4 m x 4 m room (walls one cell thick at the border), free inside, or unknown inside."""
+    values = np.full((80, 80), UNKNOWN if unknown else 0, dtype=np.int8)
+    values[0, :] = values[-1, :] = values[:, 0] = values[:, -1] = OCCUPIED
+    return OccupancyGrid(values, RES, (-2.0, -2.0, 0.0))
+
+
+def with_wall(grid: OccupancyGrid, x0: float, y0: float, x1: float, y1: float) -> OccupancyGrid:
+    """``grid`` with the rectangle [x0, x1] x [y0, y1] occupied."""
+    values = grid.values.copy()
+    (r0, r1), (c0, c1), _ = grid.cells_of(np.array([[x0, y0], [x1, y1]]))
+    values[r0 : r1 + 1, c0 : c1 + 1] = OCCUPIED
+    return OccupancyGrid(values, grid.resolution, grid.origin)
+
+
+def astar(grid: OccupancyGrid, start: Pose2D, goal: tuple[float, float], rng: np.random.Generator) -> PlanResult:
+    """An 8-connected A* on the free cells: a deterministic stand-in for RRT* in these tests."""
+    t0 = time.perf_counter()
+    free = grid.free_mask
+    (sr, gr), (sc, gc), _ = grid.cells_of(np.array([[start.x, start.y], goal]))
+    if not free[gr, gc]:
+        raise InvalidInputError("goal is not free")
+    if not free[sr, sc]:
+        raise InvalidInputError("start is not free")
+    steps = [(dr, dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1) if dr or dc]
+    parent: dict[tuple[int, int], tuple[int, int]] = {}
+    cost = {(sr, sc): 0.0}
+    queue = [(0.0, (sr, sc))]
+    while queue:
+        _, cell = heapq.heappop(queue)
+        if cell == (gr, gc):
+            break
+        for dr, dc in steps:
+            nxt = (cell[0] + dr, cell[1] + dc)
+            if not (0 <= nxt[0] < grid.height and 0 <= nxt[1] < grid.width) or not free[nxt]:
+                continue
+            new = cost[cell] + math.hypot(dr, dc)
+            if new < cost.get(nxt, math.inf):
+                cost[nxt], parent[nxt] = new, cell
+                heapq.heappush(queue, (new + math.hypot(gr - nxt[0], gc - nxt[1]), nxt))
+    else:
+        raise NoPathFoundError("no path")
+    cells = [(gr, gc)]
+    while cells[-1] != (sr, sc):
+        cells.append(parent[cells[-1]])
+    rows, cols = np.array(cells[::-1]).T
+    points = cell_centres(grid, rows, cols)
+    points[0] = (start.x, start.y)
+    points[-1] = goal
+    path = headings_along(points)
+    return PlanResult(True, path, path_length(path), time.perf_counter() - t0, 0.0, len(cost), len(cost), "found")
+
+
+def drive(nav: Navigator, pose: Pose2D, seconds: float, dt: float = 0.1, t0: float = 0.0) -> tuple[Pose2D, list]:
+    """Run the navigator on a kinematic unicycle until the goal ends or time runs out."""
+    events = []
+    now = t0
+    while now < t0 + seconds and nav.state is GoalState.ACTIVE:
+        cmd = nav.update(pose, now)
+        events.extend(cmd.events)
+        yaw = pose.yaw + cmd.omega * dt
+        pose = Pose2D(pose.x + cmd.u * dt * math.cos(pose.yaw), pose.y + cmd.u * dt * math.sin(pose.yaw), yaw)
+        now += dt
+    return pose, events
+
+
+def kinds(events) -> list[EventKind]:
+    return [e.kind for e in events]
+
+
+def test_goal_across_the_room_is_reached_within_tolerance_and_the_robot_stops() -> None:
+    nav = Navigator(astar, seed=1)
+    grid = with_wall(arena(), -0.2, -0.2, 0.2, 0.2)
+    nav.set_map(grid, 0.0)
+    assert kinds(nav.set_goal(1.5, 1.5, 0.0)) == [EventKind.ACCEPTED]
+    pose, events = drive(nav, Pose2D(-1.5, -1.5, 0.0), 120.0)
+    assert nav.state is GoalState.REACHED
+    assert math.hypot(pose.x - 1.5, pose.y - 1.5) <= 0.2
+    assert EventKind.PLANNED in kinds(events)
+    assert kinds(events)[-1] is EventKind.REACHED
+    assert nav.update(pose, 200.0) == NavCommand(0.0, 0.0)
+
+
+@pytest.mark.parametrize(
+    ("goal", "reason"),
+    [
+        ((math.nan, 0.0), "not a finite number"),
+        ((0.0, 0.0), "inside an obstacle"),
+        ((0.27, 0.0), "robot radius + margin"),
+        ((5.0, 0.0), "outside the map"),
+    ],
+)
+def test_bad_goals_are_refused_and_cause_no_motion(goal: tuple[float, float], reason: str) -> None:
+    nav = Navigator(astar)
+    nav.set_map(with_wall(arena(), -0.2, -0.2, 0.2, 0.2), 0.0)
+    (event,) = nav.set_goal(*goal, 0.0)
+    assert event.kind is EventKind.REFUSED
+    assert reason in event.message
+    assert nav.state is GoalState.IDLE
+    assert nav.update(Pose2D(-1.5, -1.5, 0.0), 0.1) == NavCommand(0.0, 0.0)
+
+
+def test_a_goal_before_any_map_is_refused() -> None:
+    (event,) = Navigator(astar).set_goal(1.0, 1.0, 0.0)
+    assert event.kind is EventKind.REFUSED
+    assert "no map" in event.message
+
+
+def test_unknown_space_is_planned_through_only_when_allowed() -> None:
+    grid = arena(unknown=True)
+    nav = Navigator(astar)
+    nav.set_map(grid, 0.0)
+    assert kinds(nav.set_goal(1.5, 1.5, 0.0)) == [EventKind.ACCEPTED]
+    cmd = nav.update(Pose2D(-1.5, -1.5, 0.0), 0.0)
+    assert cmd.path is not None
+    assert cmd.u > 0.0
+    strict = Navigator(astar, NavigatorConfig(allow_unknown=False))
+    strict.set_map(grid, 0.0)
+    (event,) = strict.set_goal(1.5, 1.5, 0.0)
+    assert event.kind is EventKind.REFUSED
+    assert "unknown" in event.message
+
+
+def test_a_bad_goal_does_not_cancel_the_running_one() -> None:
+    nav = Navigator(astar)
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(1.5, 1.5, 0.0)
+    nav.set_goal(math.inf, 0.0, 0.0)
+    assert nav.state is GoalState.ACTIVE
+    assert nav.goal == (1.5, 1.5)
+
+
+def test_a_map_revealing_a_wall_on_the_path_makes_a_new_plan_around_it() -> None:
+    nav = Navigator(astar, NavigatorConfig(replan_period_s=1e9))
+    nav.set_map(arena(unknown=True), 0.0)
+    nav.set_goal(1.5, -1.5, 0.0)
+    pose = Pose2D(-1.5, -1.5, 0.0)
+    first = nav.update(pose, 0.0).path
+    assert first is not None
+    assert nav.update(pose, 0.1).path is None  # nothing new: keep the plan
+    wall = with_wall(arena(unknown=True), 0.0, -1.95, 0.1, 0.5)  # across the straight line
+    nav.set_map(wall, 0.2)
+    cmd = nav.update(pose, 0.2)
+    assert cmd.path is not None
+    assert "blocked" in cmd.events[0].message
+    assert not np.any(wall.inflate(0.105).is_occupied(densify(cmd.path, 0.01)))
+    assert cmd.path[:, 1].max() > 0.5  # around the top of the wall
+
+
+def test_a_new_map_that_leaves_the_path_clear_keeps_it() -> None:
+    nav = Navigator(astar, NavigatorConfig(replan_period_s=1e9))
+    nav.set_map(arena(unknown=True), 0.0)
+    nav.set_goal(1.5, -1.5, 0.0)
+    pose = Pose2D(-1.5, -1.5, 0.0)
+    assert nav.update(pose, 0.0).path is not None
+    nav.set_map(with_wall(arena(unknown=True), 0.0, 1.0, 0.1, 1.5), 0.5)  # far from the path
+    assert nav.update(pose, 0.5).path is None
+
+
+def test_straying_from_the_path_triggers_a_new_plan() -> None:
+    nav = Navigator(astar, NavigatorConfig(replan_period_s=1e9, stray_distance_m=0.3))
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(1.5, -1.5, 0.0)
+    assert nav.update(Pose2D(-1.5, -1.5, 0.0), 0.0).path is not None
+    assert nav.update(Pose2D(-1.0, -1.3, 0.0), 0.1).path is None  # 0.2 m off: tolerated
+    cmd = nav.update(Pose2D(-1.0, -1.0, 0.0), 0.2)
+    assert cmd.path is not None
+    assert "strayed" in cmd.events[0].message
+    np.testing.assert_allclose(cmd.path[0, :2], [-1.0, -1.0])
+
+
+class ScriptedPlanner:
+    """Returns straight paths whose length is inflated by the scripted factors, one per call."""
+
+    def __init__(self, factors: list[float]) -> None:
+        self.factors = factors
+        self.calls = 0
+
+    def __call__(self, grid: OccupancyGrid, start: Pose2D, goal: tuple[float, float], rng) -> PlanResult:
+        factor = self.factors[min(self.calls, len(self.factors) - 1)]
+        self.calls += 1
+        # a detour through a point to the side, making the path `factor` times the straight line
+        mid = np.add([start.x, start.y], goal) / 2.0
+        half = math.hypot(goal[0] - start.x, goal[1] - start.y) / 2.0
+        side = half * math.sqrt(max(factor**2 - 1.0, 0.0))
+        direction = np.subtract(goal, [start.x, start.y]) / (2.0 * half)
+        mid = mid + side * np.array([-direction[1], direction[0]])
+        path = headings_along(np.array([[start.x, start.y], mid, goal]))
+        return PlanResult(True, path, path_length(path), 0.001, 0.001, 1, 3, "found")
+
+
+def test_periodic_plans_replace_the_path_only_when_clearly_shorter() -> None:
+    planner = ScriptedPlanner([1.3, 1.25, 1.0])
+    config = NavigatorConfig(replan_period_s=2.0, improvement_ratio=0.85, stray_distance_m=1.0, plan_turned_round=False)
+    nav = Navigator(planner, config)
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(1.5, -1.5, 0.0)
+    pose = Pose2D(-1.5, -1.5, 0.0)
+    assert nav.update(pose, 0.0).path is not None
+    assert nav.update(pose, 2.5).path is None  # period over but the map did not change: no plan
+    assert planner.calls == 1
+    nav.set_map(arena(), 2.6)
+    assert nav.update(pose, 2.6).path is None  # planned (1.25x), not clearly shorter than 1.3x: kept
+    assert planner.calls == 2
+    assert nav.update(pose, 3.0).path is None  # within the period: no plan
+    nav.set_map(arena(), 4.7)
+    cmd = nav.update(pose, 4.7)
+    assert planner.calls == 3
+    assert cmd.path is not None  # the straight line is clearly shorter
+    assert path_length(cmd.path) == pytest.approx(3.0)
+
+
+@pytest.mark.parametrize("deferred", [False, True])
+def test_repeated_planning_failures_end_the_goal_as_failed(deferred: bool) -> None:
+    def never(grid: OccupancyGrid, start: Pose2D, goal: tuple[float, float], rng) -> PlanResult:
+        raise NoPathFoundError("time budget used up")
+
+    nav = Navigator(never, NavigatorConfig(max_failed_plans=3, retry_delay_s=1.0))
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(1.5, 1.5, 0.0)
+    start = Pose2D(-1.5, -1.5, 0.0)
+    pose, events = drive_deferred(nav, start, 10.0, latency=3) if deferred else drive(nav, start, 10.0)
+    assert nav.state is GoalState.FAILED
+    assert kinds(events) == [EventKind.PLAN_FAILED] * 3 + [EventKind.FAILED]
+    assert "time budget" in events[-1].message
+    assert (pose.x, pose.y) == (-1.5, -1.5)
+
+
+def test_a_goal_walled_off_is_reported_failed_not_chased() -> None:
+    grid = with_wall(arena(), -2.0, 0.9, 2.0, 1.0)  # a wall right across the room
+    nav = Navigator(astar, NavigatorConfig(max_failed_plans=2))
+    nav.set_map(grid, 0.0)
+    nav.set_goal(1.5, 1.5, 0.0)
+    drive(nav, Pose2D(-1.5, -1.5, 0.0), 10.0)
+    assert nav.state is GoalState.FAILED
+
+
+def test_a_new_goal_preempts_the_current_one() -> None:
+    nav = Navigator(astar)
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(1.5, 1.5, 0.0)
+    pose, _ = drive(nav, Pose2D(-1.5, -1.5, 0.0), 3.0)
+    assert nav.state is GoalState.ACTIVE
+    events = nav.set_goal(-1.5, 1.5, 3.0)
+    assert kinds(events) == [EventKind.PREEMPTED, EventKind.ACCEPTED]
+    cmd = nav.update(pose, 3.0)
+    assert cmd.path is not None
+    np.testing.assert_allclose(cmd.path[-1, :2], [-1.5, 1.5])
+    pose, _ = drive(nav, pose, 120.0, t0=3.0)
+    assert nav.state is GoalState.REACHED
+    assert math.hypot(pose.x + 1.5, pose.y - 1.5) <= 0.2
+
+
+def test_lost_pose_or_stale_map_stops_the_robot_and_it_resumes() -> None:
+    nav = Navigator(astar, NavigatorConfig(map_timeout_s=5.0))
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(1.5, 1.5, 0.0)
+    pose = Pose2D(-1.5, -1.5, 0.0)
+    assert nav.update(pose, 0.0).u > 0.0
+    lost = nav.update(None, 0.1)
+    assert (lost.u, lost.omega) == (0.0, 0.0)
+    assert kinds(lost.events) == [EventKind.HOLDING]
+    assert nav.update(None, 0.2) == NavCommand(0.0, 0.0)  # reported once
+    resumed = nav.update(pose, 0.3)
+    assert kinds(resumed.events) == [EventKind.RESUMED]
+    assert resumed.u > 0.0
+    stale = nav.update(pose, 6.0)
+    assert (stale.u, stale.omega) == (0.0, 0.0)
+    assert "map" in stale.events[0].message
+    nav.set_map(arena(), 6.1)
+    assert nav.update(pose, 6.1).u > 0.0
+    assert nav.state is GoalState.ACTIVE
+
+
+def test_a_robot_inside_the_inflation_of_a_wall_can_still_plan_out() -> None:
+    nav = Navigator(astar)
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(0.0, 0.0, 0.0)
+    cmd = nav.update(Pose2D(-1.88, 0.0, 0.0), 0.0)  # 0.07 m from the wall face, inside the 0.105 m inflation
+    assert cmd.path is not None
+    assert cmd.u > 0.0
+
+
+def test_bad_configuration_is_refused() -> None:
+    with pytest.raises(InvalidInputError, match="goal_tolerance_m"):
+        NavigatorConfig(goal_tolerance_m=0.0)
+    with pytest.raises(InvalidInputError, match="max_failed_plans"):
+        NavigatorConfig(max_failed_plans=0)
+
+
+def test_a_goal_behind_the_robot_is_planned_from_the_robot_turned_round() -> None:
+    def forward_only(grid: OccupancyGrid, start: Pose2D, goal: tuple[float, float], rng) -> PlanResult:
+        # a straight path, plus a loop of radius 0.3 m when the goal is behind the start heading
+        ahead = math.cos(start.yaw) * (goal[0] - start.x) + math.sin(start.yaw) * (goal[1] - start.y)
+        path = headings_along(np.array([[start.x, start.y], goal]))
+        path[0, 2] = start.yaw
+        extra = 0.0 if ahead > 0.0 else 2.0 * math.pi * 0.3
+        return PlanResult(True, path, path_length(path) + extra, 0.001, 0.001, 1, 2, "found")
+
+    nav = Navigator(forward_only)
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(-1.0, 0.0, 0.0)
+    cmd = nav.update(Pose2D(1.0, 0.0, 0.0), 0.0)
+    assert cmd.path is not None
+    assert abs(cmd.path[0, 2]) == pytest.approx(math.pi)
+    assert cmd.u == 0.0  # it turns on the spot rather than backing up
+    assert abs(cmd.omega) > 0.0
+
+
+def drive_deferred(nav: Navigator, pose: Pose2D, seconds: float, latency: int, dt: float = 0.1) -> tuple[Pose2D, list]:
+    """:func:`drive` with planning deferred, each plan finishing ``latency`` control steps after it is asked."""
+    events: list = []
+    now, in_flight = 0.0, []
+    while now < seconds and nav.state is GoalState.ACTIVE:
+        if in_flight and in_flight[0][0] <= now:
+            _, request, outcome = in_flight.pop(0)
+            events.extend(nav.finish_plan(request, outcome).events)
+        cmd = nav.update(pose, now, defer=True)
+        events.extend(cmd.events)
+        if cmd.request is not None:
+            in_flight.append((now + latency * dt - 1e-9, cmd.request, nav.run_plan(cmd.request)))
+        yaw = pose.yaw + cmd.omega * dt
+        pose = Pose2D(pose.x + cmd.u * dt * math.cos(pose.yaw), pose.y + cmd.u * dt * math.sin(pose.yaw), yaw)
+        now += dt
+    return pose, events
+
+
+def test_deferred_planning_reaches_the_goal_like_synchronous_planning() -> None:
+    nav = Navigator(astar, NavigatorConfig(replan_period_s=2.0), seed=1)
+    nav.set_map(with_wall(arena(), -0.2, -0.2, 0.2, 0.2), 0.0)
+    nav.set_goal(1.5, 1.5, 0.0)
+    pose, events = drive_deferred(nav, Pose2D(-1.5, -1.5, 0.0), 120.0, latency=5)
+    assert nav.state is GoalState.REACHED
+    assert math.hypot(pose.x - 1.5, pose.y - 1.5) <= 0.2
+    assert kinds(events)[0] is EventKind.PLANNED
+
+
+def test_a_deferred_plan_keeps_the_robot_following_its_path_until_adopted() -> None:
+    planner = ScriptedPlanner([1.3, 1.0])
+    config = NavigatorConfig(replan_period_s=2.0, stray_distance_m=1.0, plan_turned_round=False)
+    nav = Navigator(planner, config)
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(1.5, -1.5, 0.0)
+    pose = Pose2D(-1.5, -1.5, 0.0)
+    first = nav.update(pose, 0.0, defer=True)
+    assert first.request is not None
+    assert (first.u, first.omega) == (0.0, 0.0)
+    assert nav.update(pose, 0.1, defer=True).request is None  # one plan at a time
+    done = nav.finish_plan(first.request, nav.run_plan(first.request))
+    assert done.path is not None
+    assert kinds(done.events) == [EventKind.PLANNED]
+    nav.set_map(arena(), 2.5)
+    periodic = nav.update(pose, 2.5, defer=True)
+    assert periodic.request is not None
+    assert periodic.request.reason == "periodic"
+    assert periodic.u > 0.0  # the current path is still followed while the offer is planned
+    following = nav.update(pose, 2.6, defer=True)
+    assert following.request is None
+    assert following.u > 0.0
+    assert nav.path is done.path
+    adopted = nav.finish_plan(periodic.request, nav.run_plan(periodic.request))
+    assert adopted.path is not None
+    assert path_length(adopted.path) == pytest.approx(3.0)
+    assert planner.calls == 2
+
+
+def test_a_new_goal_discards_the_plan_in_flight_for_the_old_one() -> None:
+    nav = Navigator(astar)
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(1.5, 1.5, 0.0)
+    pose = Pose2D(-1.5, -1.5, 0.0)
+    old = nav.update(pose, 0.0, defer=True).request
+    assert old is not None
+    assert nav.planning
+    nav.set_goal(-1.5, 1.5, 0.5)
+    assert not nav.planning
+    stale = nav.finish_plan(old, nav.run_plan(old))
+    assert stale == NavCommand(0.0, 0.0)
+    assert nav.path is None
+    new = nav.update(pose, 0.6, defer=True).request
+    assert new is not None
+    assert new.goal == (-1.5, 1.5)
+    adopted = nav.finish_plan(new, nav.run_plan(new))
+    assert adopted.path is not None
+    np.testing.assert_allclose(adopted.path[-1, :2], [-1.5, 1.5])
