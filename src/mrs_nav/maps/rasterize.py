@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from mrs_nav.errors import InvalidInputError, MrsNavError
+from mrs_nav.limits import MAX_GRID_CELLS, check_grid_cells
 from mrs_nav.maps.occupancy_grid import FREE, OCCUPIED, OccupancyGrid
 from mrs_nav.maps.world import World, load_world
 
@@ -39,8 +40,11 @@ def rasterize_world(world: World, resolution: float = DEFAULT_RESOLUTION, margin
     # Snap outwards to the resolution; the small tolerance keeps +-2.1 m from growing by a spurious cell.
     x0 = math.floor(xmin / resolution + 1e-6) * resolution
     y0 = math.floor(ymin / resolution + 1e-6) * resolution
-    width = max(1, math.ceil((xmax - x0) / resolution - 1e-6))
-    height = max(1, math.ceil((ymax - y0) / resolution - 1e-6))
+    # Sizes as floats first: a tiny resolution over a large world would overflow math.ceil or ask for terabytes.
+    columns, rows = (xmax - x0) / resolution - 1e-6, (ymax - y0) / resolution - 1e-6
+    if not columns * rows <= MAX_GRID_CELLS:
+        check_grid_cells(math.ceil(min(columns, 1e18)), math.ceil(min(rows, 1e18)), f"{world.source or world.name}")
+    width, height = max(1, math.ceil(columns)), max(1, math.ceil(rows))
     xs = x0 + (np.arange(width) + 0.5) * resolution
     ys = y0 + (np.arange(height) + 0.5) * resolution
     cx, cy = np.meshgrid(xs, ys)  # (height, width): rows are y
