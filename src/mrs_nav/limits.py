@@ -8,8 +8,6 @@ names the input, the field and the limit; nothing is truncated or clamped silent
 
 from __future__ import annotations
 
-import math
-
 from mrs_nav.errors import InvalidInputError
 
 #: World geometry: every coordinate within +-this of the origin, metres (a 2 km square site).
@@ -33,20 +31,6 @@ MAX_ITERATIONS = 10_000_000
 MAX_SEED = 2**32 - 1
 #: Nesting depth of a JSON obstacle list: a list of [x, y, r] lists needs 2.
 MAX_JSON_DEPTH = 2
-
-
-def check_count(value: int, what: str, *, minimum: int = 0, maximum: int = MAX_ITERATIONS) -> int:
-    """``value`` when ``minimum <= value <= maximum``; else :class:`InvalidInputError` naming ``what``."""
-    if not minimum <= value <= maximum:
-        raise InvalidInputError(f"{what} must be an integer in [{minimum}, {maximum}], got {value}")
-    return value
-
-
-def check_number(value: float, what: str, *, minimum: float = 0.0, maximum: float = MAX_BUDGET_S) -> float:
-    """``value`` when finite and ``minimum <= value <= maximum``; else :class:`InvalidInputError` naming ``what``."""
-    if not (math.isfinite(value) and minimum <= value <= maximum):
-        raise InvalidInputError(f"{what} must be a finite number in [{minimum:g}, {maximum:g}], got {value:g}")
-    return value
 
 
 def check_grid_cells(width: int, height: int, what: str) -> None:

@@ -12,7 +12,9 @@ from typing import Any
 from tqdm import tqdm
 
 from mrs_nav.bag.salvage import readable_bag
-from mrs_nav.cli.common import fail, print_json
+from mrs_nav.cli.common import check_writable, fail, print_json
+from mrs_nav.limits import MAX_ITERATIONS, MAX_SEED
+from mrs_nav.options import count_option, seed_option
 from mrs_nav.replay.golden import dump_json, load_golden, make_golden, regressions
 from mrs_nav.replay.session_replay import PlanOptions, SessionReplay, replay_session, write_session_outputs
 from mrs_nav.replay.slam_replay import write_outputs
@@ -39,12 +41,15 @@ def register(subparsers: Any) -> None:
     parser.add_argument("--slam", action="store_true", help="run SLAM over the bag")
     parser.add_argument("--plan", action="store_true", help="re-plan the recorded goals (implies --slam)")
     parser.add_argument(
-        "--plan-iterations", type=int, default=1500, help="RRT* iterations per goal with --plan (default: 1500)"
+        "--plan-iterations",
+        type=count_option,
+        default=1500,
+        help=f"RRT* iterations per goal with --plan, 1..{MAX_ITERATIONS} (default: 1500)",
     )
     parser.add_argument(
         "--plan-first", action="store_true", help="stop each re-planning query at its first path (reachability only)"
     )
-    parser.add_argument("--seed", type=int, default=0, help="planner seed with --plan (>= 0)")
+    parser.add_argument("--seed", type=seed_option, default=0, help=f"planner seed with --plan, 0..{MAX_SEED}")
     parser.add_argument(
         "--against", type=Path, metavar="GOLDEN.json", help="exit 2 naming each metric worse than the golden file"
     )
@@ -92,8 +97,9 @@ def _replay(args: argparse.Namespace, config: SlamConfig) -> SessionReplay:
 def run(args: argparse.Namespace) -> int:
     if not (args.slam or args.plan):
         return fail("nothing to do: give --slam and/or --plan")
-    if args.plan_iterations < 1 or args.seed < 0:
-        return fail(f"--plan-iterations must be >= 1 and --seed >= 0, got {args.plan_iterations} and {args.seed}")
+    check_writable(args.out, "--out", folder=True)
+    if args.write_golden:
+        check_writable(args.write_golden, "--write-golden")
     config = SlamConfig.from_assignments(args.param)
     golden = load_golden(args.against) if args.against else None
     session = _replay(args, config)

@@ -33,6 +33,7 @@ from mrs_nav.control.path_following import cross_track_distance
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
+from mrs_nav.maps.rasterize import raster_frame
 from mrs_nav.maps.world import World
 from mrs_nav.navigation.navigator import GoalState, NavEvent, Navigator, NavigatorConfig, rrt_planner
 from mrs_nav.sim import Scan, Simulator, SimulatorConfig
@@ -163,6 +164,9 @@ class Demo:
         recorder: Recorder | None = None,
         sim_config: SimulatorConfig | None = None,
     ) -> None:
+        # The map is scored against the world rasterised at SLAM's resolution: refuse a world too large for that
+        # now, not after the whole run.
+        raster_frame(world, config.slam.delta)
         self.world = world
         self.config = config
         self.recorder = recorder
