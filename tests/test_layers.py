@@ -83,5 +83,6 @@ def test_no_layer_imports_a_higher_or_sibling_layer() -> None:
             if module == "mrs_nav" or target == "__version__":
                 continue
             if RANKS[target] >= RANKS[own]:
-                wrong.append(f"{relative}.py:{line} ({own}, layer {RANKS[own]}) imports {module} (layer {RANKS[target]})")
+                where = f"{relative}.py:{line} ({own}, layer {RANKS[own]})"
+                wrong.append(f"{where} imports {module} (layer {RANKS[target]})")
     assert wrong == []

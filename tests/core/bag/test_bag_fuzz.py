@@ -17,6 +17,7 @@ from mrs_nav.bag.messages import ODOMETRY, odometry_message
 from mrs_nav.bag.salvage import MAGIC, readable_bag
 from mrs_nav.errors import BagError
 from mrs_nav.geometry import Pose2D
+from tests.core.fuzzing import attempt
 
 TOPICS = ("/odom", "/ground_truth/odom")
 
@@ -62,21 +63,20 @@ def _read_all(path: Path, workdir: Path) -> int:
     return sum(1 for _ in read_messages(bag, TOPICS))
 
 
-@given(
-    compression=st.sampled_from(["none", "bz2", "lz4"]),
-    active=st.booleans(),
-    flips=st.lists(st.tuples(st.integers(0, 1 << 20), st.integers(1, 255)), min_size=1, max_size=6),
-    cut=st.one_of(st.none(), st.integers(0, 1 << 20)),
+DAMAGE = st.tuples(
+    st.sampled_from(["none", "bz2", "lz4"]),  # chunk compression
+    st.booleans(),  # unindexed (.bag.active)
+    st.lists(st.tuples(st.integers(0, 1 << 20), st.integers(1, 255)), min_size=1, max_size=6),  # xor at offsets
+    st.one_of(st.none(), st.integers(0, 1 << 20)),  # cut at
 )
+
+
+@given(DAMAGE)
 @settings(max_examples=300)
 def test_damaged_bags_give_messages_or_a_bag_error(
-    bags: Bags,
-    tmp_path_factory: pytest.TempPathFactory,
-    compression: str,
-    active: bool,
-    flips: list[tuple[int, int]],
-    cut: int | None,
+    bags: Bags, tmp_path_factory: pytest.TempPathFactory, damage: tuple[str, bool, list[tuple[int, int]], int | None]
 ) -> None:
+    compression, active, flips, cut = damage
     data = bytearray(_unindexed(bags[compression]) if active else bags[compression])
     for position, mask in flips:
         data[position % len(data)] ^= mask
@@ -85,10 +85,10 @@ def test_damaged_bags_give_messages_or_a_bag_error(
     folder = tmp_path_factory.mktemp("fuzz")
     path = folder / ("session.bag.active" if active else "session.bag")
     path.write_bytes(bytes(data))
-    try:
-        count = _read_all(path, folder)
-    except BagError as err:
-        assert str(path) in str(err), err
+    count = attempt(lambda: _read_all(path, folder), BagError)
+    if isinstance(count, str):
+        # names the bag, or the rebuilt copy of it when a message inside a whole chunk is damaged
+        assert str(path) in count or f"{path.name.removesuffix('.active')}.salvaged.bag" in count
         return
     assert 0 <= count <= 40
     assert path.read_bytes() == bytes(data)  # the input is never written
