@@ -34,10 +34,18 @@ def load_obstacles(args: argparse.Namespace) -> tuple[Obstacles, Bounds | None]:
         return Obstacles.from_world(world), world.bounds()
     if args.circles is not None:
         text: str = args.circles
-        if not text.lstrip().startswith("[") and Path(text).is_file():
+        if not text.lstrip().startswith("[") and _is_file(text):
             return Obstacles.from_json_file(text), None
         return Obstacles.from_json(text, "--circles"), None
     raise InvalidInputError("the potential field needs obstacles: give --world or --circles")
+
+
+def _is_file(text: str) -> bool:
+    """Whether ``text`` names an existing file (a name too long for the system is JSON text, not a file)."""
+    try:
+        return Path(text).is_file()
+    except OSError:
+        return False
 
 
 def check_free(obstacles: Obstacles, bounds: Bounds | None, what: str, x: float, y: float) -> None:

@@ -69,3 +69,20 @@ def test_usage_errors_exit_1_with_one_error_line(argv: list[str], capsys: pytest
     err = capsys.readouterr().err
     assert err.startswith("ERROR: mrs-nav")
     assert err.count("\n") == 1
+
+
+@pytest.mark.parametrize(
+    ("circles", "message"),
+    [
+        ("x" * 5000, "--circles: not valid JSON"),  # too long to be a file name: text
+        ("[" * 100_000 + "]" * 100_000, "--circles: JSON nested too deeply"),
+        ("[[" + "9" * 5000 + ", 0, 1]]", "--circles: not valid JSON"),
+        ("[[1e400, 0, 1]]", "has a non-finite value"),
+        ("[[2000, 0, 1]]", "lies more than 1000 m from the origin"),
+    ],
+)
+def test_bad_circles_are_one_error_line(circles: str, message: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["plan", "--circles", circles, "--start", "0,0", "--goal", "1,1"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert message in err
