@@ -18,6 +18,7 @@ RANKS: dict[str, int] = {
     "geometry": 1,
     "robot": 1,
     "resources": 1,
+    "limits": 1,
     "planning": 2,
     "motion_model": 2,
     "options": 2,

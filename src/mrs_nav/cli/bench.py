@@ -23,6 +23,7 @@ BENCHMARKS = {
     "replay": "replay",
     "replay-batch": "replay_batch",
     "bridge": "bridge",
+    "soak": "soak",
 }
 
 

@@ -12,8 +12,10 @@ from typing import Any
 
 from tqdm import tqdm
 
-from mrs_nav.cli.common import fail, print_json
+from mrs_nav.cli.common import check_writable, fail, print_json
 from mrs_nav.errors import InvalidInputError
+from mrs_nav.limits import MAX_ITERATIONS, MAX_SEED
+from mrs_nav.options import count_option, seed_option
 from mrs_nav.replay.batch import (
     BagJob,
     aggregate,
@@ -32,12 +34,15 @@ def add_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--slam", action="store_true", help="run SLAM over the bag")
     parser.add_argument("--plan", action="store_true", help="re-plan the recorded goals (implies --slam)")
     parser.add_argument(
-        "--plan-iterations", type=int, default=1500, help="RRT* iterations per goal with --plan (default: 1500)"
+        "--plan-iterations",
+        type=count_option,
+        default=1500,
+        help=f"RRT* iterations per goal with --plan, 1..{MAX_ITERATIONS} (default: 1500)",
     )
     parser.add_argument(
         "--plan-first", action="store_true", help="stop each re-planning query at its first path (reachability only)"
     )
-    parser.add_argument("--seed", type=int, default=0, help="planner seed with --plan (>= 0)")
+    parser.add_argument("--seed", type=seed_option, default=0, help=f"planner seed with --plan, 0..{MAX_SEED}")
     parser.add_argument(
         "--param",
         action="append",
@@ -101,13 +106,9 @@ def _options(args: argparse.Namespace) -> list[str]:
 
 
 def _job(args: argparse.Namespace, bag: Path, out: Path, golden: Path | None) -> BagJob:
-    """The job ``args`` describe for ``bag`` (checked: something to do, sane budgets)."""
+    """The job ``args`` describe for ``bag`` (budgets and seeds are checked by the option types)."""
     if not (args.slam or args.plan):
         raise InvalidInputError(f"nothing to do: give --slam and/or --plan (for {bag})")
-    if args.plan_iterations < 1 or args.seed < 0:
-        raise InvalidInputError(
-            f"--plan-iterations must be >= 1 and --seed >= 0, got {args.plan_iterations} and {args.seed}"
-        )
     plan = PlanOptions(args.plan_iterations, args.seed, args.plan_first) if args.plan else None
     return BagJob(bag, out, tuple(args.param), plan, golden)
 
@@ -130,9 +131,13 @@ def run(args: argparse.Namespace) -> int:
     if len(args.bags) > 1 or args.bags[0].is_dir():
         return _run_batch(args)
     bag = args.bags[0]
+    job = _job(args, bag, args.out, args.against)
+    check_writable(args.out, "--out", folder=True)
+    if args.write_golden:
+        check_writable(args.write_golden, "--write-golden")
     bar: Any = tqdm(desc="replay", unit="scan") if sys.stderr.isatty() else None
     try:
-        outcome, session = replay_bag(_job(args, bag, args.out, args.against), bar.update if bar else None)
+        outcome, session = replay_bag(job, bar.update if bar else None)
     finally:
         if bar is not None:
             bar.close()
@@ -161,6 +166,7 @@ def _run_batch(args: argparse.Namespace) -> int:
     if args.against or args.write_golden:
         return fail("--against and --write-golden take one bag; several bags are held to NAME.golden.json beside them")
     bags = find_bags(args.bags)
+    check_writable(args.out, "--out", folder=True)
     jobs = []
     for bag in bags:
         out = args.out / bag.name.removesuffix(".active").removesuffix(".bag")
