@@ -100,6 +100,12 @@ def run(args: argparse.Namespace) -> int:
     result = session.slam
     if not result.estimate:
         return fail(f"bag {args.bag}: no scan could be paired with odometry ({result.scans_read} scans read)")
+    if result.scans_out_of_order or result.scans_rejected:
+        print(
+            f"NOTE: skipped {result.scans_out_of_order} scans stamped at or before the previous scan and "
+            f"{result.scans_rejected} scans without odometry or with bad geometry, of {result.scans_read}",
+            file=sys.stderr,
+        )
     args.out.mkdir(parents=True, exist_ok=True)
     paths = write_outputs(result, args.out)
     paths.update(write_session_outputs(session, args.out))

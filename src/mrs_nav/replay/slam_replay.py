@@ -2,6 +2,12 @@
 
 Each scan is paired with the odometry pose interpolated at its stamp (scans wait for the next odometry message
 rather than being dropped), and the laser's mounting is read from ``/tf_static`` (identity if absent).
+
+Pairing needs time to move on: a scan stamped at or before the previous scan, or an odometry message stamped at
+or before the previous one, cannot be told apart from its predecessor. Such messages are skipped and counted;
+when they are more than :data:`MAX_UNPAIRED_FRACTION` of their topic (constant or few-valued stamps), the bag
+is refused with a :class:`BagError`: every scan would be paired with the same odometry pose and the map would
+be garbage with plausible figures.
 """
 
 from __future__ import annotations
@@ -18,7 +24,7 @@ import numpy as np
 
 from mrs_nav.bag.io import read_messages
 from mrs_nav.bag.messages import pose_from_odometry, scan_from_message, stamp_of
-from mrs_nav.errors import MrsNavError
+from mrs_nav.errors import BagError, MrsNavError
 from mrs_nav.geometry import Pose2D, yaw_from_quaternion
 from mrs_nav.maps.map_io import save_map
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
@@ -30,6 +36,7 @@ from mrs_nav.slam.slam import Slam
 SCAN_TOPIC = "/scan"
 ODOM_TOPIC = "/odom"
 TRUTH_TOPIC = "/ground_truth/odom"
+MAX_UNPAIRED_FRACTION = 0.1
 
 
 @dataclass
@@ -44,6 +51,10 @@ class SlamReplay:
     ms_per_scan: list[float] = field(default_factory=list)
     scans_read: int = 0
     scans_rejected: int = 0
+    scans_out_of_order: int = 0
+    last_scan_stamp: float = -math.inf
+    odom_read: int = 0
+    odom_out_of_order: int = 0
     bag_duration_s: float = 0.0
     wall_s: float = 0.0
 
@@ -60,6 +71,7 @@ class SlamReplay:
         ms = np.asarray(self.ms_per_scan) if self.ms_per_scan else np.full(1, math.nan)
         return {
             "scans": len(self.estimate),
+            "scans_skipped": self.scans_out_of_order + self.scans_rejected,
             "ms_per_scan_median": float(np.median(ms)),
             "ms_per_scan_p95": float(np.percentile(ms, 95)),
             "realtime_factor": self.bag_duration_s / self.wall_s if self.wall_s > 0 else None,
@@ -109,7 +121,11 @@ def replay_slam(bag: Path, config: SlamConfig, progress: Callable[[int], None] |
             if progress is not None:
                 progress(1)
         elif topic == ODOM_TOPIC:
-            odom.add(stamp, pose_from_odometry(msg))
+            result.odom_read += 1
+            if stamp <= odom.latest:
+                result.odom_out_of_order += 1
+            else:
+                odom.add(stamp, pose_from_odometry(msg))
         else:
             truth.add(stamp, pose_from_odometry(msg))
         # A scan is processed once odometry reaches its stamp; earlier scans never wait on later ones.
@@ -118,6 +134,7 @@ def replay_slam(bag: Path, config: SlamConfig, progress: Callable[[int], None] |
     while pending:
         _process(result, *pending.popleft(), odom, truth)
     result.wall_s = time.perf_counter() - start
+    _check_pairing(bag, result)
     result.bag_duration_s = 0.0 if math.isnan(first_stamp) else last_stamp - first_stamp
     # Ground truth that arrived after its scan (e.g. recorded at a lower rate) is matched now.
     matched = [truth.at(t) for t in result.stamps]
@@ -125,7 +142,23 @@ def replay_slam(bag: Path, config: SlamConfig, progress: Callable[[int], None] |
     return result
 
 
+def _check_pairing(bag: Path, result: SlamReplay) -> None:
+    for what, bad, total in (
+        ("scans", result.scans_out_of_order, result.scans_read),
+        ("odometry messages", result.odom_out_of_order, result.odom_read),
+    ):
+        if bad > MAX_UNPAIRED_FRACTION * total:
+            raise BagError(
+                f"bag {bag}: {bad} of {total} {what} are stamped at or before the previous one, so scans cannot be "
+                "paired with distinct odometry; fix the stamps (carmen2bag repairs a CARMEN log's)"
+            )
+
+
 def _process(result: SlamReplay, stamp: float, msg: Any, odom: PoseTrack, truth: PoseTrack) -> None:
+    if stamp <= result.last_scan_stamp:
+        result.scans_out_of_order += 1
+        return
+    result.last_scan_stamp = stamp
     pose = odom.at(stamp)
     if pose is None:
         result.scans_rejected += 1
