@@ -172,22 +172,29 @@ def read_flaser(path: Path) -> Iterator[CarmenScan]:
 
 @dataclass(frozen=True)
 class CarmenLog:
-    """The scans of a log and, per scan, the odometry increment since the previous scan (``None``: a gap)."""
+    """The scans of a log and, per scan, the odometry since the previous scan: ``(stamp, pose)`` of each ODOM
+    line, the pose relative to the stream's pose at the previous scan (empty: a gap; empty for the first scan)."""
 
     scans: list[CarmenScan]
-    increments: list[Pose2D | None]
+    odometry: list[list[tuple[float, Pose2D]]]
     odom_lines: int
+
+    @property
+    def increments(self) -> list[Pose2D | None]:
+        """Per scan, the odometry increment since the previous scan (None: a gap; identity for the first)."""
+        first: list[Pose2D | None] = [Pose2D(0.0, 0.0, 0.0)]
+        return first + [path[-1][1] if path else None for path in self.odometry[1:]]
 
     @property
     def gaps(self) -> int:
         """Scans after the first with no odometry since the previous one."""
-        return sum(inc is None for inc in self.increments[1:])
+        return sum(not path for path in self.odometry[1:])
 
 
 def read_log(path: Path) -> CarmenLog:
-    """All scans of ``path`` with their odometry increments (see the module doc for the rule)."""
+    """All scans of ``path`` with the odometry between them (see the module doc for the rule)."""
     scans: list[CarmenScan] = []
-    increments: list[Pose2D | None] = []
+    odometry: list[list[tuple[float, Pose2D]]] = []
     base: CarmenOdom | None = None  # the stream's pose at the previous scan
     last: CarmenOdom | None = None  # the last ODOM line read
     since: list[CarmenOdom] = []  # ODOM lines since the previous scan
@@ -201,17 +208,13 @@ def read_log(path: Path) -> CarmenLog:
                 since.append(record)
             last = record
             continue
-        if not scans:
-            increments.append(Pose2D(0.0, 0.0, 0.0))
-        elif since and base is not None:
-            increments.append(since[-1].pose.relative_to(base.pose))
-        else:
-            increments.append(None)
+        anchor = base
+        odometry.append([(o.timestamp, o.pose.relative_to(anchor.pose)) for o in since] if scans and anchor else [])
         scans.append(record)
         base, since = last, []
         if base is None:  # no odometry before the first scan: the stream starts at the next line
             base = CarmenOdom(record.timestamp, record.pose)
-    return CarmenLog(scans, increments, odom_lines)
+    return CarmenLog(scans, odometry, odom_lines)
 
 
 def _same(a: Pose2D, b: Pose2D) -> bool:

@@ -7,7 +7,8 @@ and ``/tf_static`` (``base_footprint -> base_scan``, identity: the logged poses 
 the scan's timestamp; odometry shares each scan's stamp.
 
 Odometry: by default the robot's real odometry, integrated from the log's ODOM increments
-(:func:`mrs_nav.bag.carmen.read_log`) starting at the first scan's pose; a scan with no odometry since the
+(:func:`mrs_nav.bag.carmen.read_log`) starting at the first scan's pose, one ``/odom`` per ODOM line that falls
+between two scans in time order plus one at each scan's stamp; a scan with no odometry since the
 previous one (a gap) repeats the previous odometry pose, so the scan matcher has to find that motion alone.
 With ``noise`` given (``--odom synthetic``), or when the log has no ODOM lines at all, odometry is synthesised
 from the logged poses' increments with the odometry motion model's noise (:mod:`mrs_nav.motion_model`).
@@ -20,6 +21,7 @@ none); the repairs are counted in a note. The scans' order in the file is kept.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -78,8 +80,9 @@ def carmen_to_bag(
     if noise is None and content.odom_lines == 0:
         notes.append(f"{log}: no ODOM lines; odometry synthesised from the logged poses with the default noise")
         noise = OdometryNoise.of(DEFAULT_ALPHAS)
+    between: list[list[tuple[float, Pose2D]]] = [[] for _ in scans]
     if noise is None:
-        odom = log_odometry(content)
+        odom, between = log_odometry(content, stamps)
         kind = "log"
         if content.gaps:
             notes.append(f"{log}: {content.gaps} scans have no odometry since the previous scan; odometry held there")
@@ -89,16 +92,25 @@ def carmen_to_bag(
     limit = max_range if max_range is not None else max(float(np.max(s.ranges)) for s in scans)
     if not limit > 0.0:
         raise InvalidInputError(f"CARMEN log {log}: every range is 0, so the laser's range limit is unknown")
-    _write(bag, scans, stamps, odom, limit=limit, progress=progress)
+    _write(bag, scans, stamps, (odom, between), limit=limit, progress=progress)
     return ConversionSummary(len(scans), stamps[-1] - stamps[0], kind, tuple(notes))
 
 
-def log_odometry(content: CarmenLog) -> list[Pose2D]:
-    """Odometry poses integrated from the log's increments, from the first scan's pose; a gap holds the pose."""
+def log_odometry(content: CarmenLog, stamps: list[float]) -> tuple[list[Pose2D], list[list[tuple[float, Pose2D]]]]:
+    """Odometry poses at the scans, integrated from the log's increments from the first scan's pose (a gap
+    holds the pose), and per scan the odometry of the ODOM lines stamped strictly between the previous scan's
+    (repaired) stamp and its own, in increasing time (lines out of that order are left out)."""
     odom = [content.scans[0].pose]
-    for increment in content.increments[1:]:
-        odom.append(odom[-1] if increment is None else odom[-1].compose(increment))
-    return odom
+    between: list[list[tuple[float, Pose2D]]] = [[]]
+    for k, path in enumerate(content.odometry[1:], start=1):
+        previous = odom[-1]
+        odom.append(previous.compose(path[-1][1]) if path else previous)
+        inside: list[tuple[float, Pose2D]] = []
+        for stamp, relative in path[:-1]:
+            if max(stamps[k - 1], inside[-1][0] if inside else -math.inf) < stamp < stamps[k]:
+                inside.append((stamp, previous.compose(relative)))
+        between.append(inside)
+    return odom, between
 
 
 def repaired_stamps(stamps: list[float]) -> tuple[list[float], int, float]:
@@ -133,7 +145,7 @@ def _write(
     bag: Path,
     scans: list[CarmenScan],
     stamps: list[float],
-    odom: list[Pose2D],
+    odometry: tuple[list[Pose2D], list[list[tuple[float, Pose2D]]]],
     *,
     limit: float,
     progress: Callable[[int], None] | None,
@@ -154,10 +166,14 @@ def _write(
                 tf_message(Pose2D(0.0, 0.0, 0.0), first, "base_footprint", "base_scan"),
                 latching=True,
             )
-            for seq, (scan, t, pose) in enumerate(zip(scans, stamps, odom, strict=True)):
+            odom_seq = 0
+            for seq, (scan, t, pose, between) in enumerate(zip(scans, stamps, *odometry, strict=True)):
+                for odom_t, odom_pose in [*between, (t, pose)]:
+                    msg = odometry_message(odom_pose, odom_t, "odom", "base_footprint", odom_seq)
+                    writer.write("/odom", ODOMETRY, _ns(odom_t), msg)
+                    writer.write("/tf", TF, _ns(odom_t), tf_message(odom_pose, odom_t, "odom", "base_footprint"))
+                    odom_seq += 1
                 data = LaserScanData(scan.angle_min, scan.angle_increment, 0.0, limit, scan.ranges)
-                writer.write("/odom", ODOMETRY, _ns(t), odometry_message(pose, t, "odom", "base_footprint", seq))
-                writer.write("/tf", TF, _ns(t), tf_message(pose, t, "odom", "base_footprint"))
                 truth = odometry_message(scan.pose, t, "map", "base_footprint", seq)
                 writer.write("/ground_truth/odom", ODOMETRY, _ns(t), truth)
                 writer.write("/scan", LASER_SCAN, _ns(t), laser_scan_message(data, t, "base_scan", seq))

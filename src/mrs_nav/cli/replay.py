@@ -4,6 +4,7 @@ and hold the metrics to a golden file."""
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import tempfile
 from pathlib import Path
@@ -17,6 +18,7 @@ from mrs_nav.replay.golden import dump_json, load_golden, make_golden, regressio
 from mrs_nav.replay.session_replay import PlanOptions, SessionReplay, replay_session, write_session_outputs
 from mrs_nav.replay.slam_replay import write_outputs
 from mrs_nav.slam.config import SlamConfig
+from mrs_nav.slam.relations import load_relations
 
 
 def register(subparsers: Any) -> None:
@@ -57,6 +59,24 @@ def register(subparsers: Any) -> None:
         metavar="NAME=VALUE",
         help="SLAM parameter with gmapping's name, e.g. --param maxUrange=30 --param linearUpdate=0 (repeatable)",
     )
+    parser.add_argument(
+        "--relations",
+        type=Path,
+        metavar="FILE",
+        help=(
+            "score the SLAM trajectory on a relations file (Kummerle et al. 2009: 't1 t2 x y z roll pitch yaw' a "
+            "line): mean and std of translational (m) and rotational (deg) relation error"
+        ),
+    )
+    parser.add_argument(
+        "--relations-offset",
+        type=float,
+        metavar="S",
+        help=(
+            "relation stamp minus bag stamp (s); default: found as the most common difference, to 1 ms, between "
+            "relation and scan stamps"
+        ),
+    )
     parser.add_argument("--json", action="store_true", help="print the metrics as one JSON object")
     parser.set_defaults(handler=run)
 
@@ -95,6 +115,9 @@ def run(args: argparse.Namespace) -> int:
     if args.plan_iterations < 1 or args.seed < 0:
         return fail(f"--plan-iterations must be >= 1 and --seed >= 0, got {args.plan_iterations} and {args.seed}")
     config = SlamConfig.from_assignments(args.param)
+    relations = load_relations(args.relations) if args.relations else None
+    if args.relations_offset is not None and not math.isfinite(args.relations_offset):
+        return fail(f"--relations-offset must be finite, got {args.relations_offset}")
     golden = load_golden(args.against) if args.against else None
     session = _replay(args, config)
     result = session.slam
@@ -113,6 +136,8 @@ def run(args: argparse.Namespace) -> int:
         record = make_golden(args.bag.name.removesuffix(".active"), _options(args), session.metrics)
         args.write_golden.write_text(dump_json(record), encoding="utf-8")
     summary = result.summary()
+    if relations is not None:
+        summary.update(result.relation_errors(relations, args.relations_offset))
     summary["map_yaml"] = str(paths["map_yaml"])
     summary["metrics"] = session.metrics
     found = regressions(session.metrics, golden) if golden is not None else []

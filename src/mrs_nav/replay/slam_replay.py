@@ -31,6 +31,7 @@ from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.replay.pose_track import PoseTrack
 from mrs_nav.slam.config import SlamConfig
 from mrs_nav.slam.metrics import TrajectoryErrors, align_se2, trajectory_errors
+from mrs_nav.slam.relations import Relation, relation_errors
 from mrs_nav.slam.slam import Slam
 
 SCAN_TOPIC = "/scan"
@@ -57,6 +58,7 @@ class SlamReplay:
     odom_out_of_order: int = 0
     bag_duration_s: float = 0.0
     wall_s: float = 0.0
+    odom_track: PoseTrack = field(default_factory=PoseTrack)
 
     @property
     def has_truth(self) -> bool:
@@ -64,6 +66,22 @@ class SlamReplay:
 
     def errors(self) -> TrajectoryErrors | None:
         return trajectory_errors(self.estimate, self.truth) if self.has_truth else None
+
+    def relation_errors(self, relations: list[Relation], offset: float | None = None) -> dict[str, Any]:
+        """The relations metric (:mod:`mrs_nav.slam.relations`) of the SLAM trajectory, and of the bag's ground
+        truth bridged the same way (``relations_reference_*``: the floor the bridging leaves) when it has one."""
+        stamps = self.stamps
+        estimate = [p.pose for p in self.slam.processed]
+        mine = relation_errors(relations, stamps, estimate, self.odom_track.at, self.odometry, offset=offset)
+        out: dict[str, Any] = mine.as_dict()
+        if self.has_truth:
+            # The truth's own odometry is unknown: bridge it with the same wheel odometry.
+            floor = relation_errors(
+                relations, stamps, self.truth, self.odom_track.at, self.odometry, offset=mine.offset_s
+            )
+            out["relations_reference_trans_mean_m"] = floor.trans_mean_m
+            out["relations_reference_rot_mean_deg"] = floor.rot_mean_deg
+        return out
 
     def summary(self) -> dict[str, Any]:
         """The JSON summary printed by ``mrs-nav replay --slam --json`` (error fields None without truth)."""
@@ -105,7 +123,7 @@ def laser_mounting(bag: Path, base_frame: str = "base_footprint") -> Pose2D:
 def replay_slam(bag: Path, config: SlamConfig, progress: Callable[[int], None] | None = None) -> SlamReplay:
     """Run SLAM over ``bag`` (needs ``/scan`` and ``/odom``; uses ``/ground_truth/odom`` if present)."""
     result = SlamReplay(Slam(config, laser_mounting(bag)))
-    odom, truth = PoseTrack(), PoseTrack()
+    odom, truth = result.odom_track, PoseTrack()
     pending: deque[tuple[float, Any]] = deque()
     first_stamp = last_stamp = math.nan
     start = time.perf_counter()
