@@ -17,7 +17,7 @@ from mrs_nav.cli.common import fail, print_json
 from mrs_nav.replay.golden import dump_json, load_golden, make_golden, regressions
 from mrs_nav.replay.session_replay import PlanOptions, SessionReplay, replay_session, write_session_outputs
 from mrs_nav.replay.slam_replay import write_outputs
-from mrs_nav.slam.config import SlamConfig
+from mrs_nav.slam.config import MAX_COORDINATE_M, SlamConfig
 from mrs_nav.slam.relations import load_relations
 
 
@@ -126,7 +126,14 @@ def run(args: argparse.Namespace) -> int:
     if result.scans_out_of_order or result.scans_rejected:
         print(
             f"NOTE: skipped {result.scans_out_of_order} scans stamped at or before the previous scan and "
-            f"{result.scans_rejected} scans without odometry or with bad geometry, of {result.scans_read}",
+            f"{result.scans_rejected} scans without odometry or with bad values, of {result.scans_read}"
+            + (f" (first: {result.first_rejection})" if result.first_rejection else ""),
+            file=sys.stderr,
+        )
+    if result.odom_rejected:
+        print(
+            f"NOTE: skipped {result.odom_rejected} of {result.odom_read} odometry messages farther than "
+            f"{MAX_COORDINATE_M:g} m from the origin",
             file=sys.stderr,
         )
     args.out.mkdir(parents=True, exist_ok=True)
