@@ -1,0 +1,59 @@
+"""The parameters of a :class:`~mrs_nav.navigation.navigator.Navigator` (shared by its parts)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from mrs_nav.control.path_following import FollowerConfig
+from mrs_nav.errors import InvalidInputError
+from mrs_nav.robot import BURGER_RADIUS
+
+
+@dataclass(frozen=True)
+class NavigatorConfig:
+    """Parameters of :class:`Navigator` (metres, seconds)."""
+
+    robot_radius: float = BURGER_RADIUS
+    # Added to the robot radius when inflating the map: the planners keep exactly the inflated distance from
+    # obstacles, and the follower's cross-track error and the SLAM pose error eat into it.
+    safety_margin_m: float = 0.1
+    goal_tolerance_m: float = 0.2
+    allow_unknown: bool = True
+    stray_distance_m: float = 0.3
+    replan_period_s: float = 5.0
+    improvement_ratio: float = 0.85
+    improvement_min_m: float = 0.2
+    max_failed_plans: int = 5
+    # Also plan from the robot turned round on the spot and keep the shorter plan: arcs run forward only, so a
+    # goal behind the robot otherwise costs a loop.
+    plan_turned_round: bool = True
+    retry_delay_s: float = 1.0
+    progress_m: float = 0.1
+    progress_timeout_s: float = 30.0
+    map_timeout_s: float = 0.0  # 0 = off: a static map (published once, latched) never refreshes
+    follower: FollowerConfig = field(default_factory=FollowerConfig)
+
+    def __post_init__(self) -> None:
+        for name in ("goal_tolerance_m", "stray_distance_m", "replan_period_s", "improvement_ratio", "progress_m"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise InvalidInputError(f"navigator {name} must be a positive number, got {value}")
+        for name in (
+            "robot_radius",
+            "safety_margin_m",
+            "improvement_min_m",
+            "retry_delay_s",
+            "progress_timeout_s",
+            "map_timeout_s",
+        ):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise InvalidInputError(f"navigator {name} must be a number >= 0, got {value}")
+        if self.max_failed_plans < 1:
+            raise InvalidInputError(f"navigator max_failed_plans must be >= 1, got {self.max_failed_plans}")
+
+    @property
+    def inflation_m(self) -> float:
+        """How far (m) obstacles are grown for planning: the robot radius plus the safety margin."""
+        return self.robot_radius + self.safety_margin_m
