@@ -14,8 +14,9 @@ from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
+from scipy import ndimage
 
-from mrs_nav.maps.occupancy_grid import OccupancyGrid
+from mrs_nav.maps.occupancy_grid import UNKNOWN, OccupancyGrid
 
 
 class GoalState(Enum):
@@ -57,12 +58,14 @@ class NavEvent:
 
 
 def goal_refusal(
-    raw: OccupancyGrid | None, grid: OccupancyGrid | None, x: float, y: float, inflation_m: float
+    raw: OccupancyGrid | None, grid: OccupancyGrid | None, x: float, y: float, *, yaw: float | None, inflation_m: float
 ) -> str | None:
-    """Why the goal ``(x, y)`` must be refused on the map ``raw`` planned on as ``grid`` (inflated by
-    ``inflation_m``, unknown made free when allowed), or None when it may be tried."""
+    """Why the goal ``(x, y)`` (heading ``yaw``, None for any) must be refused on the map ``raw`` planned on as
+    ``grid`` (inflated by ``inflation_m``, unknown made free when allowed), or None when it may be tried."""
     if not (math.isfinite(x) and math.isfinite(y)):
         return "its position is not a finite number"
+    if yaw is not None and not math.isfinite(yaw):
+        return "its heading is not a finite number"
     if grid is None or raw is None:
         return "no map received yet"
     goal = np.array([[x, y]])
@@ -75,7 +78,24 @@ def goal_refusal(
         return f"it lies within {inflation_m:.3f} m (robot radius + margin) of an obstacle"
     if not grid.is_free(goal)[0]:
         return "it lies in unknown space and allow_unknown is off"
+    if enclosed_unknown(raw, x, y):
+        return "it lies in unknown space enclosed by obstacles (the inside of an obstacle)"
     return None
+
+
+def enclosed_unknown(raw: OccupancyGrid, x: float, y: float) -> bool:
+    """Whether ``(x, y)`` lies in an unknown region of ``raw`` that touches neither a free cell nor the edge of
+    the map: the unseen inside of an obstacle, which ``allow_unknown`` must not make a goal."""
+    rows, cols, inside = raw.cells_of(np.array([[x, y]]))
+    unknown = raw.values == UNKNOWN
+    if not inside[0] or not unknown[rows[0], cols[0]]:
+        return False
+    labels, _ = ndimage.label(unknown)  # 4-connected: a diagonal gap in a wall does not open it
+    region = labels == labels[rows[0], cols[0]]
+    if region[0, :].any() or region[-1, :].any() or region[:, 0].any() or region[:, -1].any():
+        return False
+    rim = ndimage.binary_dilation(region) & ~region
+    return not bool(np.any(raw.free_mask[rim]))
 
 
 class GoalTracker:
@@ -84,6 +104,7 @@ class GoalTracker:
     def __init__(self) -> None:
         self.state = GoalState.IDLE
         self.goal: tuple[float, float] | None = None
+        self.yaw: float | None = None  # the goal heading (rad), None when any will do
 
     @property
     def active(self) -> bool:
@@ -93,14 +114,16 @@ class GoalTracker:
         assert self.goal is not None
         return f"goal ({self.goal[0]:.2f}, {self.goal[1]:.2f})"
 
-    def accept(self, x: float, y: float) -> list[NavEvent]:
-        """Make ``(x, y)`` the active goal; the events (a preemption of the active goal first, if any)."""
+    def accept(self, x: float, y: float, yaw: float | None = None) -> list[NavEvent]:
+        """Make ``(x, y)`` (heading ``yaw``) the active goal; the events (a preemption first, if any)."""
         events = []
         if self.active:
             events.append(NavEvent(EventKind.PREEMPTED, f"{self.describe()} preempted by a new goal"))
         self.goal = (float(x), float(y))
+        self.yaw = None if yaw is None else float(yaw)
         self.state = GoalState.ACTIVE
-        events.append(NavEvent(EventKind.ACCEPTED, f"goal ({x:.2f}, {y:.2f}) accepted"))
+        heading = "" if yaw is None else f", heading {yaw:.2f} rad"
+        events.append(NavEvent(EventKind.ACCEPTED, f"goal ({x:.2f}, {y:.2f}{heading}) accepted"))
         return events
 
     def cancel(self) -> list[NavEvent]:
@@ -113,4 +136,5 @@ class GoalTracker:
     def end(self, state: GoalState) -> None:
         """End the active goal in ``state``."""
         self.goal = None
+        self.yaw = None
         self.state = state

@@ -10,10 +10,14 @@ It composes three parts, each in its own module: the goal state machine (:mod:`.
 With ``allow_unknown`` (as move_base's option of that name) unknown cells count as free, so a goal in a room
 SLAM has not seen yet gets an optimistic plan that is repaired as the map reveals it.
 
-The goal is reached when the robot is within ``goal_tolerance_m`` of it and the follower has brought its
-holonomic point to rest at the end of the path (or the robot is within half the tolerance). Without a pose,
-or when the last map is older than ``map_timeout_s``, the robot is stopped and the goal kept; it resumes when
-both are back. Times are in seconds of the caller's clock (sim time in ROS), distances in metres.
+Within ``approach_radius_m`` of the goal the path is left to a :class:`GoalApproach`, which drives the axle
+onto the goal position (``xy_tolerance_m``) and then turns to the goal heading, if the goal has one
+(``yaw_tolerance_rad``): then the goal is reached. Laser scans (:meth:`Navigator.set_scan`) mark obstacles that
+are not on the map for planning (:mod:`.obstacles`; a path they block is replanned) and a return ahead closer
+than the robot radius plus ``stop_clearance_m`` stops the robot and makes a new plan. Without a pose, when the
+caller says why to hold (e.g. a stale localisation), or when the last map is older than ``map_timeout_s``, the
+robot is stopped and the goal kept; it resumes when all are back. Times are in seconds of the caller's clock
+(sim time in ROS), distances in metres, angles in radians.
 
 With ``update(pose, now, defer=True)`` a needed plan is returned as a :class:`PlanRequest` for a worker
 (:meth:`run_plan`, then :meth:`finish_plan`). Meanwhile the robot follows the current path when the plan is only
@@ -28,12 +32,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mrs_nav.control.goal_approach import GoalApproach
 from mrs_nav.control.path_following import PathFollower
 from mrs_nav.errors import InvalidInputError
-from mrs_nav.geometry import FloatArray, Pose2D
+from mrs_nav.geometry import FloatArray, Pose2D, wrap_angle
 from mrs_nav.maps.occupancy_grid import OccupancyGrid, planning_grid
 from mrs_nav.navigation.config import NavigatorConfig
 from mrs_nav.navigation.goal import EventKind, GoalState, GoalTracker, NavEvent, goal_refusal
+from mrs_nav.navigation.obstacles import ScanObstacles, return_ahead
 from mrs_nav.navigation.plan_worker import (
     PLANNERS,
     Planner,
@@ -90,6 +96,10 @@ class Navigator:
         self.last_plan: PlanResult | None = None
         self.plans_made = 0
         self._grid: OccupancyGrid | None = None
+        self._obstacles = ScanObstacles()
+        self._marked_grid: OccupancyGrid | None = None
+        self._returns: FloatArray = np.zeros((0, 2))
+        self._approach: GoalApproach | None = None
         self._plan_grid: OccupancyGrid | None = None
         self._map_stamp = -math.inf
         self._follower: PathFollower | None = None
@@ -109,9 +119,21 @@ class Navigator:
     def set_map(self, grid: OccupancyGrid, now: float) -> None:
         """Take a new map (raw occupancy, not inflated) received at time ``now``."""
         self._grid = grid
+        self._obstacles.set_map(grid)
+        self._marked_grid = None
         self._plan_grid = None
         self._map_stamp = now
         self._policy.new_map()
+
+    def set_scan(self, origin: FloatArray, ends: FloatArray, hit: FloatArray) -> None:
+        """Take a laser scan in the map frame: the laser's position ``origin`` (``(2,)``), the beam end points
+        ``ends`` (``(N, 2)``, at the return or the maximum range) and ``hit`` (``(N,)`` bool, a return)."""
+        ends = np.asarray(ends, dtype=np.float64).reshape(-1, 2)
+        self._returns = ends[np.asarray(hit, dtype=bool)]
+        if self._obstacles.add_scan(origin, ends, hit):
+            self._marked_grid = None
+            self._plan_grid = None
+            self._policy.new_map()
 
     @property
     def grid(self) -> OccupancyGrid | None:
@@ -119,22 +141,37 @@ class Navigator:
         return self._grid
 
     @property
-    def inflated_grid(self) -> OccupancyGrid | None:
-        """The last map as planned on: inflated, unknown made free when ``allow_unknown``."""
+    def marked_grid(self) -> OccupancyGrid | None:
+        """The last map with the obstacles seen by the laser marked occupied."""
         if self._grid is None:
+            return None
+        if self._marked_grid is None:
+            self._marked_grid = self._obstacles.apply(self._grid)
+        return self._marked_grid
+
+    @property
+    def inflated_grid(self) -> OccupancyGrid | None:
+        """The last map as planned on: marked, inflated, unknown made free when ``allow_unknown``."""
+        marked = self.marked_grid
+        if marked is None:
             return None
         if self._plan_grid is None:
             cfg = self.config
-            self._plan_grid = planning_grid(self._grid, cfg.inflation_m, cfg.allow_unknown)
+            self._plan_grid = planning_grid(marked, cfg.inflation_m, cfg.allow_unknown)
         return self._plan_grid
 
-    def set_goal(self, x: float, y: float, now: float) -> list[NavEvent]:
-        """Ask to go to ``(x, y)`` (map frame). A valid goal preempts the current one; a bad one is refused and
-        leaves the current goal (if any) running."""
-        refusal = goal_refusal(self._grid, self.inflated_grid, x, y, self.config.inflation_m)
+    @property
+    def goal_yaw(self) -> float | None:
+        """The heading (rad) the current goal asks for, None when any will do."""
+        return self._goal.yaw
+
+    def set_goal(self, x: float, y: float, now: float, yaw: float | None = None) -> list[NavEvent]:
+        """Ask to go to ``(x, y)`` (map frame), ending with heading ``yaw`` (rad; None: any). A valid goal
+        preempts the current one; a bad one is refused and leaves the current goal (if any) running."""
+        refusal = goal_refusal(self.marked_grid, self.inflated_grid, x, y, yaw=yaw, inflation_m=self.config.inflation_m)
         if refusal is not None:
             return [NavEvent(EventKind.REFUSED, f"goal ({x:.2f}, {y:.2f}) refused: {refusal}")]
-        events = self._goal.accept(x, y)
+        events = self._goal.accept(x, y, yaw)
         self._reset_goal()
         self._policy.new_goal(now)
         return events
@@ -147,6 +184,7 @@ class Navigator:
     def _reset_goal(self) -> None:
         self.path = None
         self._follower = None
+        self._approach = None
         self._holding = False
         self._pending = None  # a plan in flight for this goal is now stale
 
@@ -161,12 +199,13 @@ class Navigator:
 
     # -- the control step ---------------------------------------------------------------------------------
 
-    def update(self, pose: Pose2D | None, now: float, defer: bool = False) -> NavCommand:
+    def update(self, pose: Pose2D | None, now: float, defer: bool = False, hold: str | None = None) -> NavCommand:
         """One control step for the robot at ``pose`` (map frame; ``None`` when unknown) at time ``now``. With
-        ``defer`` a needed plan is not made here but returned as the command's ``request`` (module docstring)."""
+        ``defer`` a needed plan is not made here but returned as the command's ``request`` (module docstring);
+        ``hold`` (why) stops the robot and keeps the goal, as a lost pose does."""
         if not self._goal.active:
             return NavCommand(0.0, 0.0)
-        hold = self._hold_reason(pose, now)
+        hold = hold or self._hold_reason(pose, now)
         if hold is not None:
             if self._holding:
                 return NavCommand(0.0, 0.0)
@@ -179,16 +218,17 @@ class Navigator:
             self._holding = False
             events.append(NavEvent(EventKind.RESUMED, "pose and map are back; resuming"))
         distance = math.hypot(self.goal[0] - pose.x, self.goal[1] - pose.y)
-        if self._arrived(pose, distance):
-            what = self._goal.describe()
-            self._end(GoalState.REACHED)
-            events.append(NavEvent(EventKind.REACHED, f"{what} reached, {distance:.3f} m away"))
-            return NavCommand(0.0, 0.0, events=tuple(events))
+        if self._approach is None and distance <= self.config.approach_radius_m:
+            self._approach = GoalApproach(*self.goal, self._goal.yaw, self.config.approach)
+        if self._approach is not None:
+            return self._approach_step(pose, distance, events)
         self._policy.note_distance(distance, now)
 
         new_path: FloatArray | None = None
         request: PlanRequest | None = None
         reason = None if self._pending is not None else self.replan_reason(pose, now)
+        if reason is None and self._pending is None and self._follower is not None and self._driving_into(pose):
+            reason = "obstacle ahead"
         if reason is not None:
             request = self._request(pose, now, reason)
             if defer:
@@ -201,7 +241,34 @@ class Navigator:
         if self._follower is None:  # no valid plan: wait for the next attempt (or the plan in flight)
             return NavCommand(0.0, 0.0, new_path, tuple(events), request)
         command = self._follower.command(pose)
+        if command.u > 0.0 and self._driving_into(pose):  # a plan is in flight: wait for it, stopped
+            return NavCommand(0.0, 0.0, new_path, tuple(events), request)
         return NavCommand(command.u, command.omega, new_path, tuple(events), request)
+
+    def _driving_into(self, pose: Pose2D) -> bool:
+        """Whether a laser return lies in the robot's way closer than its radius plus the stop clearance."""
+        cfg = self.config
+        if not return_ahead(pose, self._returns, cfg.robot_radius, cfg.stop_clearance_m):
+            return False
+        assert self._follower is not None
+        return self._follower.command(pose).u > 0.0
+
+    def _approach_step(self, pose: Pose2D, distance: float, events: list[NavEvent]) -> NavCommand:
+        """Drive the last centimetres (and turn to the heading); the goal is reached when the approach is done."""
+        assert self._approach is not None
+        step = self._approach.command(pose)
+        if step.done:
+            what = self._goal.describe()
+            yaw = self._goal.yaw
+            heading = "" if yaw is None else f" and {abs(wrap_angle(yaw - pose.yaw)):.3f} rad"
+            self._end(GoalState.REACHED)
+            events.append(NavEvent(EventKind.REACHED, f"{what} reached, {distance:.3f} m{heading} away"))
+            return NavCommand(0.0, 0.0, events=tuple(events))
+        cfg = self.config
+        u = step.u
+        if u > 0.0 and return_ahead(pose, self._returns, cfg.robot_radius, cfg.stop_clearance_m):
+            u = 0.0  # turning on the spot is safe for a round robot; driving on is not
+        return NavCommand(u, step.omega, events=tuple(events))
 
     def _hold_reason(self, pose: Pose2D | None, now: float) -> str | None:
         if pose is None:
@@ -213,15 +280,6 @@ class Navigator:
             return f"the map is {now - self._map_stamp:.1f} s old"
         return None
 
-    def _arrived(self, pose: Pose2D, distance: float) -> bool:
-        tolerance = self.config.goal_tolerance_m
-        if distance > tolerance:
-            return False
-        if distance <= tolerance / 2.0 or self._follower is None:
-            return True
-        # within the tolerance: stop once the follower has brought its point to the end of the path
-        return bool(self._follower.command(pose).done)
-
     def replan_reason(self, pose: Pose2D, now: float) -> str | None:
         """Why the next :meth:`update` at ``pose`` will plan (``None``: it will not). A node may stop the robot
         first, since planning takes wall-clock time while a simulation runs on."""
@@ -232,10 +290,10 @@ class Navigator:
 
     def _maps(self) -> tuple[OccupancyGrid, OccupancyGrid]:
         """The planning grid and the raw map (only called once a map is known)."""
-        grid = self.inflated_grid
-        if grid is None or self._grid is None:
+        grid, raw = self.inflated_grid, self.marked_grid
+        if grid is None or raw is None:
             raise InvalidInputError("no map received yet")
-        return grid, self._grid
+        return grid, raw
 
     def _request(self, pose: Pose2D, now: float, reason: str) -> PlanRequest:
         """Start a plan for ``reason``: the bookkeeping of an attempt, and what the planner needs."""
