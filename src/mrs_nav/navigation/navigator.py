@@ -310,6 +310,18 @@ class Navigator:
         self._policy.started(now)
         return PlanRequest(self.goal, pose, now, reason, grid, raw, remaining)
 
+    def plan_query(self, start: Pose2D, goal: tuple[float, float]) -> PlanRequest:
+        """A request to plan from ``start`` to ``goal`` on the current map that leaves the navigator's own goal
+        alone (move_base's ``make_plan``); run it with :func:`~mrs_nav.navigation.plan_worker.run_plan` and a
+        generator of its own. Raises :class:`InvalidInputError` for a goal :meth:`set_goal` would refuse."""
+        refusal = goal_refusal(
+            self.marked_grid, self.inflated_grid, goal[0], goal[1], yaw=None, inflation_m=self.config.inflation_m
+        )
+        if refusal is not None:
+            raise InvalidInputError(f"goal ({goal[0]:.2f}, {goal[1]:.2f}): {refusal}")
+        grid, raw = self._maps()
+        return PlanRequest(goal, start, math.nan, "make_plan", grid, raw, math.inf)
+
     def run_plan(self, request: PlanRequest) -> PlanOutcome:
         """Plan for ``request`` (:func:`~mrs_nav.navigation.plan_worker.run_plan`). Reads only the request, the
         planner and the random generator, so it may run in another thread while :meth:`update` runs (with
