@@ -21,7 +21,9 @@ from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.occupancy_grid import OCCUPIED, BoolArray, OccupancyGrid
 from mrs_nav.navigation.plan_worker import cell_centres
 
-MAP_TOLERANCE_M = 0.1  # returns this close to a mapped obstacle are that obstacle (range noise, pose error)
+# Returns this close to a mapped obstacle are that obstacle (range noise, drift of the pose estimate); up to the
+# inflation distance this hides nothing from the planner, which keeps that far from the mapped obstacle anyway.
+MAP_TOLERANCE_M = 0.2
 
 
 class ScanObstacles:
