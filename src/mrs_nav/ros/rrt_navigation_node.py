@@ -103,7 +103,7 @@ class RrtNavigationConfig:
     pose_timeout_s: float = 1.0
     correction_timeout_s: float = 5.0
     correction_freshness_s: float = 0.3
-    scan_timeout_s: float = 0.3
+    scan_timeout_s: float = 0.4
     map_frame: str = "map"
     odom_frame: str = "odom"
     base_frame: str = "base_footprint"
@@ -167,7 +167,7 @@ class RrtNavigationConfig:
             pose_timeout_s=private_param("pose_timeout", 1.0),
             correction_timeout_s=private_param("correction_timeout", 5.0),
             correction_freshness_s=private_param("correction_freshness", 0.3),
-            scan_timeout_s=private_param("scan_timeout", 0.3),
+            scan_timeout_s=private_param("scan_timeout", 0.4),
             map_frame=private_param("map_frame", "map"),
             odom_frame=private_param("odom_frame", "odom"),
             base_frame=private_param("base_frame", "base_footprint"),
