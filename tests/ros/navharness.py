@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import threading
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -91,10 +90,6 @@ class StatusLog:
 
     def close(self) -> None:
         self.sub.unregister()
-
-
-def trajectory_lines(path: Path) -> list[list[float]]:
-    return [[float(v) for v in line.split()] for line in path.read_text().splitlines() if not line.startswith("#")]
 
 
 def world_map_msg(rospy: Any, world: str, margin: float = 0.2) -> Any:

@@ -117,3 +117,13 @@ def scan_in_frame(
     heading = laser.yaw + angles[keep]
     ends = np.column_stack((laser.x + reach * np.cos(heading), laser.y + reach * np.sin(heading)))
     return np.array([laser.x, laser.y]), ends, hit[keep]
+
+
+def publish_unless_shutdown(publisher: rospy.Publisher, msg: object, who: str) -> None:
+    """Publish ``msg``; a topic closed by a shutdown under a timer tick in flight is no error (Ctrl-C)."""
+    try:
+        publisher.publish(msg)
+    except rospy.ROSException as err:
+        if not (rospy.is_shutdown() or rospy.core.is_shutdown_requested()):
+            raise
+        rospy.logdebug(f"{who}: not sent while shutting down: {err}")

@@ -73,6 +73,7 @@ from mrs_nav.ros.navigation_conversions import (
     latest_pose,
     path_msg,
     pose_in_frame,
+    publish_unless_shutdown,
     scan_in_frame,
 )
 from mrs_nav.ros.params import private_param
@@ -380,12 +381,12 @@ class RrtNavigationNode:
         events = finished.events + command.events
         # the heartbeat (a zero Twist every tick while idle) paces a lockstep simulator at any sim rate
         if self.config.heartbeat or state is GoalState.ACTIVE or events:
-            self._cmd_pub.publish(twist)
+            publish_unless_shutdown(self._cmd_pub, twist, "rrt_navigation")
         path = command.path if command.path is not None else finished.path
         if path is not None:
-            self._path_pub.publish(path_msg(path, now, self.config.map_frame))
+            publish_unless_shutdown(self._path_pub, path_msg(path, now, self.config.map_frame), "rrt_navigation")
         if costmap is not None:
-            self._costmap_pub.publish(grid_msg(costmap, now, self.config.map_frame))
+            publish_unless_shutdown(self._costmap_pub, grid_msg(costmap, now, self.config.map_frame), "rrt_navigation")
         self._report(events)
         if handle is not None:
             self._action_step(handle, state, pose, now, events)
@@ -438,14 +439,12 @@ class RrtNavigationNode:
         """Log each event and publish it on ``~status``."""
         for e in events:
             (rospy.logwarn if e.kind.warning else rospy.loginfo)(f"rrt_navigation: {e.message}")
-            self._status_pub.publish(String(data=f"{STATUS_OF_EVENT[e.kind]}: {e.message}"))
+            status = String(data=f"{STATUS_OF_EVENT[e.kind]}: {e.message}")
+            publish_unless_shutdown(self._status_pub, status, "rrt_navigation")
 
     def _stop(self) -> None:
         """On shutdown: stop the loop and the robot (publishing can fail once rospy has closed the topic)."""
         if self._timer is not None:
             self._timer.shutdown()
         self._planner_pool.shutdown(wait=False)
-        try:
-            self._cmd_pub.publish(Twist())
-        except rospy.ROSException as err:
-            rospy.logdebug(f"rrt_navigation: final stop not sent: {err}")
+        publish_unless_shutdown(self._cmd_pub, Twist(), "rrt_navigation")
