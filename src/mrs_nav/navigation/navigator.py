@@ -31,6 +31,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from mrs_nav.control.goal_approach import GoalApproach
 from mrs_nav.control.path_following import PathFollower
@@ -125,7 +126,7 @@ class Navigator:
         self._map_stamp = now
         self._policy.new_map()
 
-    def set_scan(self, origin: FloatArray, ends: FloatArray, hit: FloatArray) -> None:
+    def set_scan(self, origin: npt.ArrayLike, ends: npt.ArrayLike, hit: npt.ArrayLike) -> None:
         """Take a laser scan in the map frame: the laser's position ``origin`` (``(2,)``), the beam end points
         ``ends`` (``(N, 2)``, at the return or the maximum range) and ``hit`` (``(N,)`` bool, a return)."""
         ends = np.asarray(ends, dtype=np.float64).reshape(-1, 2)

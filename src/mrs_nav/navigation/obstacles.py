@@ -92,6 +92,23 @@ class ScanObstacles:
         return OccupancyGrid(values, raw.resolution, raw.origin)
 
 
+def beam_ends(
+    laser: Pose2D, angles: npt.ArrayLike, ranges: npt.ArrayLike, range_min: float, range_max: float
+) -> tuple[FloatArray, FloatArray, BoolArray]:
+    """A laser scan from the scanner pose ``laser`` (map frame) as :meth:`ScanObstacles.add_scan` takes it: the
+    laser's position ``(2,)``, the end points ``(N, 2)`` of the beams that saw something (at the return, or at
+    ``range_max`` for a beam without one: +inf or beyond ``range_max``, REP 117) and which of them returned.
+    NaN and too-short beams saw nothing and are left out."""
+    a = np.asarray(angles, dtype=np.float64)
+    r = np.asarray(ranges, dtype=np.float64)
+    hit = np.isfinite(r) & (r >= range_min) & (r <= range_max)
+    keep = hit | np.isposinf(r) | (np.isfinite(r) & (r > range_max))
+    reach = np.where(hit, r, range_max)[keep]
+    heading = laser.yaw + a[keep]
+    ends = np.column_stack((laser.x + reach * np.cos(heading), laser.y + reach * np.sin(heading)))
+    return np.array([laser.x, laser.y]), ends, hit[keep]
+
+
 def return_ahead(pose: Pose2D, returns: FloatArray, robot_radius: float, clearance_m: float) -> bool:
     """Whether a beam return (``(N, 2)``, map frame) lies in the robot's way: ahead of its centre, within
     ``robot_radius`` of its line of travel and within ``robot_radius + clearance_m`` of its centre."""

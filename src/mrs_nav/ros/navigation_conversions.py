@@ -16,7 +16,8 @@ from sensor_msgs.msg import LaserScan
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
-from mrs_nav.ros.conversions import laser_scan_arrays, pose_from_msg, pose_from_transform, pose_msg, valid_ranges
+from mrs_nav.navigation.obstacles import beam_ends
+from mrs_nav.ros.conversions import laser_scan_arrays, pose_from_msg, pose_from_transform, pose_msg
 
 
 def grid_from_msg(msg: OccupancyGridMsg) -> OccupancyGrid:
@@ -108,15 +109,8 @@ def scan_in_frame(
             f" range_max {msg.range_max}: not usable numbers"
         )
     angles, ranges = laser_scan_arrays(msg)
-    hit = valid_ranges(msg, ranges)
-    # beams with no return (inf, or beyond range_max) saw free space up to range_max; NaN beams saw nothing
-    open_beam = ~hit & ~np.isnan(ranges) & ((ranges > msg.range_max) | np.isposinf(ranges))
-    keep = hit | open_beam
-    reach = np.where(hit, ranges, msg.range_max)[keep]
     laser = pose_from_transform(buffer.lookup_transform(frame, msg.header.frame_id, rospy.Time(0)))
-    heading = laser.yaw + angles[keep]
-    ends = np.column_stack((laser.x + reach * np.cos(heading), laser.y + reach * np.sin(heading)))
-    return np.array([laser.x, laser.y]), ends, hit[keep]
+    return beam_ends(laser, angles, ranges, msg.range_min, msg.range_max)
 
 
 def publish_unless_shutdown(publisher: rospy.Publisher, msg: object, who: str) -> None:
