@@ -176,3 +176,25 @@ def test_a_box_put_in_the_way_is_driven_around_without_contact(arena: dict[str, 
     assert Obstacles.from_world(with_box).signed_distance(trip[:, 1:]).min() > FOOTPRINT_RADIUS
     assert truth.contacts == 0
     assert trip[:, 2].max() > 0.5  # north of the cylinder: the other way round
+
+
+def test_a_scan_with_nan_angles_is_dropped_with_a_warning(arena: dict[str, Any]) -> None:
+    from actionlib_msgs.msg import GoalStatus
+    from rosgraph_msgs.msg import Log
+    from sensor_msgs.msg import LaserScan
+
+    rospy, client = arena["rospy"], arena["client"]
+    warnings: list[str] = []
+    log_sub = rospy.Subscriber(
+        "/rosout_agg", Log, lambda m: warnings.append(m.msg) if m.name == "/rrt_navigation" else None, queue_size=100
+    )
+    scan_pub = rospy.Publisher("/scan", LaserScan, queue_size=1, latch=True)
+    bad = LaserScan(angle_min=math.nan, angle_increment=math.nan, range_min=0.12, range_max=3.5, ranges=[1.0] * 360)
+    bad.header.frame_id = "base_scan"
+    wait_for(lambda: scan_pub.get_num_connections() > 0, 20.0, "the navigation node's /scan")
+    scan_pub.publish(bad)
+    wait_for(lambda: any("dropping scan" in w for w in warnings), 30.0, "the warning about the bad scan")
+    scan_pub.unregister()
+    log_sub.unregister()
+    client.send_goal(target(rospy, -1.0, -1.5, 0.0))  # still alive and navigating
+    assert wait_result(arena) == GoalStatus.SUCCEEDED, client.get_goal_status_text()
