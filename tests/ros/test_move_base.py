@@ -54,8 +54,9 @@ def arena(ros_master: RosMaster, rospy_node: Any) -> Iterator[dict[str, Any]]:
         client = actionlib.SimpleActionClient("move_base", MoveBaseAction)
         assert client.wait_for_server(rospy.Duration(60.0)), "no move_base action server"
         rospy.wait_for_message("/move_base/global_costmap/costmap", OccupancyGrid, 60.0)  # it has the map
-        yield {"rospy": rospy, "truth": truth, "client": client, "procs": (sim, nav)}
-        correction.close()
+        state = {"rospy": rospy, "truth": truth, "client": client, "procs": (sim, nav), "correction": correction}
+        yield state
+        state["correction"].close()
         map_pub.unregister()
         truth.close()
 
@@ -197,4 +198,24 @@ def test_a_scan_with_nan_angles_is_dropped_with_a_warning(arena: dict[str, Any])
     scan_pub.unregister()
     log_sub.unregister()
     client.send_goal(target(rospy, -1.0, -1.5, 0.0))  # still alive and navigating
+    assert wait_result(arena) == GoalStatus.SUCCEEDED, client.get_goal_status_text()
+
+
+def test_a_robot_that_loses_its_localisation_stops_and_resumes_when_it_returns(arena: dict[str, Any]) -> None:
+    from actionlib_msgs.msg import GoalStatus
+
+    rospy, truth, client = arena["rospy"], arena["truth"], arena["client"]
+    _, x0, y0 = truth.last()
+    client.send_goal(target(rospy, -x0, -y0 + 0.2, 0.0))
+    t0 = rospy.get_time()
+    wait_for(lambda: rospy.get_time() > t0 + 4.0, 30.0, "the robot to be on its way")
+    arena["correction"].stop()  # map -> odom stops, as when the SLAM node dies
+    # the last correction was dated IdentityCorrection.ahead into the future: it went stale from then on
+    stale_from = rospy.get_time() + IdentityCorrection.ahead
+    wait_for(lambda: rospy.get_time() > stale_from + 3.0, 30.0, "3 s of sim time without localisation")
+    after = truth.since(stale_from + 0.5)
+    assert math.hypot(*(after[-1, 1:] - after[0, 1:])) < 0.01  # stopped within 0.5 s of sim time
+    assert client.get_state() == GoalStatus.ACTIVE
+    arena["correction"].close()
+    arena["correction"] = IdentityCorrection(rospy)  # localisation is back
     assert wait_result(arena) == GoalStatus.SUCCEEDED, client.get_goal_status_text()

@@ -10,7 +10,9 @@ the goal. :class:`GoalApproach` takes over near the goal:
    the position is reached (and latched, as move_base's ``latch_xy_goal_tolerance``: turning on the spot may
    shift the axle by wheel slip) within ``xy_tolerance_m``;
 2. **heading** (when the goal has one): turn on the spot at ``k_angular * error``, at least ``min_angular``,
-   until within ``yaw_tolerance_rad``.
+   until within ``yaw_tolerance_rad`` while turning no faster than ``settled_rate`` (estimated from the
+   successive poses): a base still spinning from the position phase would otherwise coast out of the tolerance
+   after the goal is declared reached (the Burger decelerates at about 6 rad/s^2: 0.7 rad from 2.84 rad/s).
 
 Speeds in m/s and rad/s, limited to ``max_linear`` / ``max_angular``.
 """
@@ -40,6 +42,7 @@ class ApproachConfig:
     min_angular: float = 0.3  # rad/s
     # Above this bearing error the robot turns on the spot before driving (no sideways creep past the goal).
     turn_first_rad: float = 0.5
+    settled_rate: float = 0.5  # rad/s
     max_linear: float = BURGER_MAX_LINEAR
     max_angular: float = BURGER_MAX_ANGULAR
 
@@ -52,6 +55,7 @@ class ApproachConfig:
             "min_linear",
             "min_angular",
             "turn_first_rad",
+            "settled_rate",
             "max_linear",
             "max_angular",
         ):
@@ -79,10 +83,15 @@ class GoalApproach:
         self.config = config or ApproachConfig()
         self.x, self.y, self.yaw = x, y, yaw
         self.position_reached = False
+        self._last: tuple[float, float] | None = None  # (time, yaw) of the previous pose
 
-    def command(self, pose: Pose2D) -> ApproachCommand:
-        """The commands for the robot at ``pose`` (the goal's frame)."""
+    def command(self, pose: Pose2D, now: float) -> ApproachCommand:
+        """The commands for the robot at ``pose`` (the goal's frame) at time ``now`` (s)."""
         cfg = self.config
+        rate = math.inf
+        if self._last is not None and now > self._last[0]:
+            rate = abs(wrap_angle(pose.yaw - self._last[1])) / (now - self._last[0])
+        self._last = (now, pose.yaw)
         distance = math.hypot(self.x - pose.x, self.y - pose.y)
         if distance <= cfg.xy_tolerance_m:
             self.position_reached = True
@@ -96,7 +105,7 @@ class GoalApproach:
         if self.yaw is None:
             return ApproachCommand(0.0, 0.0, True)
         error = wrap_angle(self.yaw - pose.yaw)
-        if abs(error) <= cfg.yaw_tolerance_rad:
+        if abs(error) <= cfg.yaw_tolerance_rad and rate <= cfg.settled_rate:
             return ApproachCommand(0.0, 0.0, True)
         return ApproachCommand(0.0, _limited(cfg.k_angular * error, cfg.min_angular, cfg.max_angular), False)
 

@@ -222,7 +222,7 @@ class Navigator:
         if self._approach is None and distance <= self.config.approach_radius_m:
             self._approach = GoalApproach(*self.goal, self._goal.yaw, self.config.approach)
         if self._approach is not None:
-            return self._approach_step(pose, distance, events)
+            return self._approach_step(pose, now, distance, events)
         self._policy.note_distance(distance, now)
 
         new_path: FloatArray | None = None
@@ -254,10 +254,10 @@ class Navigator:
         assert self._follower is not None
         return self._follower.command(pose).u > 0.0
 
-    def _approach_step(self, pose: Pose2D, distance: float, events: list[NavEvent]) -> NavCommand:
+    def _approach_step(self, pose: Pose2D, now: float, distance: float, events: list[NavEvent]) -> NavCommand:
         """Drive the last centimetres (and turn to the heading); the goal is reached when the approach is done."""
         assert self._approach is not None
-        step = self._approach.command(pose)
+        step = self._approach.command(pose, now)
         if step.done:
             what = self._goal.describe()
             yaw = self._goal.yaw

@@ -15,7 +15,7 @@ def run(approach: GoalApproach, pose: Pose2D, dt: float = 0.1, steps: int = 600)
     """Drive a unicycle with the approach until done; the final pose, the steps taken and the top speed."""
     top = 0.0
     for step in range(steps):
-        cmd = approach.command(pose)
+        cmd = approach.command(pose, step * dt)
         if cmd.done:
             return pose, step, top
         top = max(top, abs(cmd.u))
@@ -44,14 +44,14 @@ def test_the_robot_ends_on_the_goal_within_both_tolerances(start: Pose2D, goal_y
 
 def test_it_slows_down_near_the_goal() -> None:
     approach = GoalApproach(0.0, 0.0, None)
-    far = approach.command(Pose2D(-0.3, 0.0, 0.0)).u
-    near = approach.command(Pose2D(-0.08, 0.0, 0.0)).u
+    far = approach.command(Pose2D(-0.3, 0.0, 0.0), 0.0).u
+    near = approach.command(Pose2D(-0.08, 0.0, 0.0), 0.1).u
     assert far > 2.0 * near > 0.0
 
 
 def test_a_robot_already_on_the_goal_only_turns() -> None:
     approach = GoalApproach(1.0, 1.0, math.pi)
-    cmd = approach.command(Pose2D(1.0, 1.0, 0.0))
+    cmd = approach.command(Pose2D(1.0, 1.0, 0.0), 0.0)
     assert cmd.u == 0.0
     assert cmd.omega != 0.0
     assert not cmd.done
@@ -62,3 +62,11 @@ def test_bad_tolerances_are_refused() -> None:
         ApproachConfig(xy_tolerance_m=0.0)
     with pytest.raises(InvalidInputError, match="below pi"):
         ApproachConfig(yaw_tolerance_rad=4.0)
+
+
+def test_a_robot_still_spinning_inside_the_yaw_tolerance_is_not_done_yet() -> None:
+    approach = GoalApproach(0.0, 0.0, 0.0)
+    assert not approach.command(Pose2D(0.0, 0.0, -0.3), 0.0).done
+    spinning = approach.command(Pose2D(0.0, 0.0, -0.1), 0.1)  # 2 rad/s through the tolerance band
+    assert not spinning.done
+    assert approach.command(Pose2D(0.0, 0.0, -0.09), 0.2).done  # settled
