@@ -22,6 +22,7 @@ MAX_RATE = ("real_time_factor:=0", "lockstep:=true")
 XY_TOLERANCE, YAW_TOLERANCE = 0.05, 0.17  # m, rad: the node's defaults (move_base's names)
 MARGIN = 1.0  # m of free map outside the arena's walls, where no path leads
 SLACK = 0.01  # m the pose estimate (odometry) and the truth may differ over a short trip
+DRIFT_SLACK = 0.03  # m the same after the tens of metres of the earlier tests (identity map->odom, no SLAM)
 
 
 def target(rospy: Any, x: float, y: float, yaw: float) -> Any:
@@ -170,7 +171,7 @@ def test_a_box_put_in_the_way_is_driven_around_without_contact(arena: dict[str, 
     assert wait_result(arena) == GoalStatus.SUCCEEDED, client.get_goal_status_text()
     add.unregister()
     _, x, y = truth.last()
-    assert math.hypot(x - 1.5, y + 1.5) <= XY_TOLERANCE + SLACK
+    assert math.hypot(x - 1.5, y + 1.5) <= XY_TOLERANCE + DRIFT_SLACK
     world = load_world(REPO / "worlds" / "simple.world")
     with_box = replace(world, boxes=(*world.boxes, Box("box", 0.0, -1.0, 0.25, 0.0, 0.2, 2.0, 0.5)))
     trip = truth.since(added_at)
@@ -205,8 +206,7 @@ def test_a_robot_that_loses_its_localisation_stops_and_resumes_when_it_returns(a
     from actionlib_msgs.msg import GoalStatus
 
     rospy, truth, client = arena["rospy"], arena["truth"], arena["client"]
-    _, x0, y0 = truth.last()
-    client.send_goal(target(rospy, -x0, -y0 + 0.2, 0.0))
+    client.send_goal(target(rospy, -1.2, 1.0, 0.0))  # from (-1, -1.5), the previous goal
     t0 = rospy.get_time()
     wait_for(lambda: rospy.get_time() > t0 + 4.0, 30.0, "the robot to be on its way")
     arena["correction"].stop()  # map -> odom stops, as when the SLAM node dies
