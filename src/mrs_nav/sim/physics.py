@@ -25,7 +25,7 @@ import ode
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
-from mrs_nav.maps.world import World
+from mrs_nav.maps.world import Box, World
 from mrs_nav.sim.ode_bindings import (
     CONTACT_APPROX1,
     CONTACT_SOFT_CFM,
@@ -87,14 +87,18 @@ class Physics:
 
     def _add_obstacles(self, world: World) -> None:
         for box in world.boxes:
-            geom = ode.GeomBox(self.obstacle_space, (box.size_x, box.size_y, box.size_z))
-            geom.setPosition((box.x, box.y, box.z))
-            geom.setRotation(_rotation_z(box.yaw))
-            self._obstacles[geom] = box.name
+            self.add_box(box)
         for cyl in world.cylinders:
             geom = ode.GeomCylinder(self.obstacle_space, cyl.radius, cyl.length)  # axis along z
             geom.setPosition((cyl.x, cyl.y, cyl.z))
             self._obstacles[geom] = cyl.name
+
+    def add_box(self, box: Box) -> None:
+        """Put a static box into the world (the laser sees it from the next scan)."""
+        geom = ode.GeomBox(self.obstacle_space, (box.size_x, box.size_y, box.size_z))
+        geom.setPosition((box.x, box.y, box.z))
+        geom.setRotation(_rotation_z(box.yaw))
+        self._obstacles[geom] = box.name
 
     def _build_robot(self, start: Pose2D) -> None:
         p = self.params
