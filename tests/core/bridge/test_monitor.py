@@ -52,6 +52,15 @@ def grid() -> Any:
     return T["nav_msgs/msg/OccupancyGrid"](header, info, np.array([0, 100, -1, 0] * 3, dtype=np.int8))
 
 
+def answer_types(query: zenoh.Query) -> None:
+    """Answer a ``@types`` query for odometry and occupancy grids as the bridge does."""
+    for name in ("nav_msgs/msg/Odometry", "nav_msgs/msg/OccupancyGrid"):
+        key = types_key("mrs_nav", name)
+        if zenoh.KeyExpr(key).intersects(query.key_expr):
+            text, md5 = STORE.generate_msgdef(name, ros_version=1)
+            query.reply(key, encode_definition(name, md5, text))
+
+
 class FakeBridge:
     """A Zenoh peer speaking the bridge's wire format (what zenoh_bridge does, minus ROS)."""
 
@@ -60,11 +69,7 @@ class FakeBridge:
         self.entities: list[Any] = [self.session.declare_queryable("mrs_nav/@types/**", self.answer)]
 
     def answer(self, query: zenoh.Query) -> None:
-        for name in ("nav_msgs/msg/Odometry", "nav_msgs/msg/OccupancyGrid"):
-            key = types_key("mrs_nav", name)
-            if zenoh.KeyExpr(key).intersects(query.key_expr):
-                text, md5 = STORE.generate_msgdef(name, ros_version=1)
-                query.reply(key, encode_definition(name, md5, text))
+        answer_types(query)
 
     def publisher(self, topic: str, type_name: str, latched: bool) -> Any:
         key = topic_key("mrs_nav", topic)
