@@ -189,7 +189,7 @@ def test_a_remote_goal_is_refused_by_default(plain: Bridge, rospy_node: Any) -> 
     finally:
         sub.unregister()
     assert result.returncode == 1
-    assert "not in the bridge's inbound allow-list" in result.stderr
+    assert "inbound allow-list" in result.stderr
     assert goals == []
 
 
@@ -222,6 +222,7 @@ def test_a_malformed_payload_is_dropped_with_a_log_line_and_the_bridge_keeps_run
         for junk in (b"\x00garbage", serialize_goal(float("nan"), 0, 0), serialize_goal(1, 1, 0, frame="odom")):
             pub.put(junk)
         wait_for(lambda: "dropped remote message on /move_base_simple/goal" in routed.log(), 10, "the drop log line")
+        time.sleep(1.0 / 2.0)  # goals are limited to 2 Hz (junk does not count): one period since the last test's
         pub.put(serialize_goal(0.5, 0.25, 0.0))
         wait_for(lambda: len(goals) >= 1, 10, "a valid goal after the malformed ones")
     finally:

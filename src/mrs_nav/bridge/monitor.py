@@ -161,9 +161,17 @@ class RemoteMonitor:
         """The bridge's own report (:func:`mrs_nav.bridge.wire.decode_status`); InvalidInputError when no bridge
         answers within the timeout, so that a monitor pointed at the wrong place says so."""
         session = self._require_session()
-        for reply in session.get(status_key(self.prefix), timeout=self.timeout):
-            if reply.ok is not None:
-                return decode_status(reply.ok.payload.to_bytes())
+        deadline = time.monotonic() + self.timeout
+        # A peer learns the bridge's queryable some milliseconds after it connects, and a query nobody is known
+        # to answer ends at once: ask again until the timeout.
+        while True:
+            remaining = deadline - time.monotonic()
+            for reply in session.get(status_key(self.prefix), timeout=max(0.05, remaining)):
+                if reply.ok is not None:
+                    return decode_status(reply.ok.payload.to_bytes())
+            if remaining <= 0:
+                break
+            time.sleep(0.05)
         where = ", ".join(self.connect)
         raise InvalidInputError(f"no bridge under prefix {self.prefix!r} answered on {where} within {self.timeout:g} s")
 
@@ -203,7 +211,11 @@ class RemoteMonitor:
                 return True, reply.ok.payload.to_string()
             if reply.err is not None:
                 return False, reply.err.payload.to_string()
-        return False, f"no bridge under {self.prefix!r} answered on {', '.join(self.connect)}"
+        # The bridge's access control drops queries it would refuse anyway, so silence is the refusal.
+        return False, (
+            f"no bridge under {self.prefix!r} on {', '.join(self.connect)} took the goal: {GOAL_TOPIC} is not in "
+            "its inbound allow-list, its access control does not let this session send it, or no bridge is there"
+        )
 
     def _require_session(self) -> zenoh.Session:
         if self._session is None:

@@ -6,8 +6,8 @@ Encoding schema and the md5 + receive time in the attachment (:mod:`mrs_nav.brid
 (the map) go through an advanced publisher whose cache answers late joiners. Inbound, only allow-listed
 topics are listened to, and :class:`mrs_nav.bridge.inbound.InboundValidator` checks each message first.
 
-Inbound, a payload's size is checked before it is copied out of Zenoh, then the topic's rate limit, then the
-content; every refusal is counted and logged at most once per ``DROP_LOG_PERIOD`` per topic.
+Inbound, a payload's size is checked before it is copied out of Zenoh, then its content, then the topic's rate
+limit; every refusal is counted and logged at most once per ``DROP_LOG_PERIOD`` per topic.
 
 Liveness follows the ROS graph: a topic whose last ROS publisher is gone loses its liveliness token and its
 late-joiner cache, and when the master no longer lists the bridge's subscriptions or publications (it was
@@ -54,6 +54,9 @@ from mrs_nav.errors import MrsNavError
 
 # Messages dropped by the inbound checks are logged at most once per this many seconds (with a count).
 DROP_LOG_PERIOD = 5.0
+# Discovery ticks a bridged topic may go without our registration at the master or a connection to any of its
+# publishers before the bridge acts (subscribes again, or withdraws the topic).
+SUSPECT_TICKS = 3
 
 
 def load_config() -> BridgeConfig:
@@ -87,7 +90,7 @@ class _Outbound:
     forwarded: int = 0
     limited: int = 0
     last_received: float = 0.0  # time.monotonic() of the last ROS message, 0 before the first
-    unlisted: int = 0  # consecutive discovery ticks in which the master did not list our subscription
+    suspect: int = 0  # consecutive discovery ticks without our registration or any publisher connection
 
 
 @dataclass
@@ -214,19 +217,24 @@ class ZenohBridgeNode:
             if nodes - {me} and topic not in self._outbound:
                 self._bridge(topic, types.get(topic, ""))
         for topic, out in list(self._outbound.items()):
-            if not publishing.get(topic, set()) - {me}:
+            others = publishing.get(topic, set()) - {me}
+            listed = me in subscribing.get(topic, set())
+            if not others:
+                self._retire(out)  # the last publisher unregistered
+                continue
+            if listed and out.subscriber.get_num_connections() > 0:
+                out.suspect = 0
+                continue
+            out.suspect += 1
+            if out.suspect < SUSPECT_TICKS:  # a registration or connection may still be under way
+                continue
+            if listed:  # the master lists publishers, none of which we reach: killed without unregistering
                 self._retire(out)
-            elif me not in subscribing.get(topic, set()):
-                out.unlisted += 1
-                if out.unlisted >= 2:  # twice in a row: not a registration still under way
-                    rospy.logwarn(
-                        "zenoh bridge: the master does not list our subscription to %s; subscribing again", topic
-                    )
-                    out.subscriber.unregister()
-                    out.subscriber = self._subscribe(out)
-                    out.unlisted = 0
-            else:
-                out.unlisted = 0
+            else:  # the master forgot us (it was restarted): register again
+                rospy.logwarn("zenoh bridge: the master does not list our subscription to %s; subscribing again", topic)
+                out.subscriber.unregister()
+                out.subscriber = self._subscribe(out)
+                out.suspect = 0
         for topic, inbound in self._inbound.items():
             if me not in publishing.get(topic, set()):
                 rospy.logwarn("zenoh bridge: the master does not list our publisher of %s; registering again", topic)
@@ -257,18 +265,19 @@ class ZenohBridgeNode:
         )
 
     def _retire(self, out: _Outbound) -> None:
-        """The topic's last ROS publisher is gone: withdraw its token and cache (rediscovered if it returns)."""
+        """The topic has no live ROS publisher: withdraw its token and cache (it is rediscovered if one comes)."""
         with self._lock:
             self._outbound.pop(out.topic, None)
             publisher, token, out.publisher, out.token = out.publisher, out.token, None, None
         out.subscriber.unregister()
+        if token is None:
+            return  # nothing was announced (no message ever came): nothing to withdraw or to log
         for entity in (token, publisher):
-            if entity is not None:
-                try:
-                    entity.undeclare()
-                except zenoh.ZError as err:
-                    rospy.logwarn("zenoh bridge: withdrawing %s: %s", out.topic, err)
-        rospy.loginfo("zenoh bridge: %s has no ROS publisher any more; its token and cache are withdrawn", out.topic)
+            try:
+                entity.undeclare()
+            except zenoh.ZError as err:
+                rospy.logwarn("zenoh bridge: withdrawing %s: %s", out.topic, err)
+        rospy.loginfo("zenoh bridge: %s has no live ROS publisher any more; token and cache withdrawn", out.topic)
 
     def _announce(self) -> None:
         """zenoh-bridge-ros1's discovery beacon (an empty best-effort put per bridged publisher and period; its
@@ -382,8 +391,8 @@ class ZenohBridgeNode:
     def _accept(self, topic: str, schema: str, payload: zenoh.ZBytes | None, attachment: zenoh.ZBytes | None) -> str:
         """Check and publish into ROS; return '' on success, else the reason (counted, logged at a bounded rate).
 
-        The cheap checks come first and copy nothing: the allow-list, the payload's size (Zenoh has already
-        bounded what it reassembles by ``max_message_bytes``), the topic's rate.
+        The cheap checks come first and copy nothing: the allow-list, then the payload's size (Zenoh has
+        already bounded what it reassembles by ``max_message_bytes``); then the content, then the topic's rate.
         """
         inbound = self._inbound.get(topic)
         if inbound is None:
@@ -392,8 +401,6 @@ class ZenohBridgeNode:
         size = len(payload) if payload is not None else 0
         if size > inbound.rule.max_bytes:
             return self._refuse(inbound, f"{size} bytes exceed the {inbound.rule.max_bytes}-byte limit of {topic}")
-        if not inbound.limiter.allow(time.monotonic()):
-            return self._refuse(inbound, f"more than {inbound.rule.max_rate:g} messages/s on {topic}")
         data = payload.to_bytes() if payload is not None else b""
         try:
             self.validator.validate(topic, schema, data, attachment.to_bytes() if attachment is not None else None)
@@ -401,6 +408,9 @@ class ZenohBridgeNode:
             msg.deserialize(data)
         except Exception as err:  # anything the network sends may be broken: never let it stop the node
             return self._refuse(inbound, str(err))
+        # The rate counts valid messages only, so that a stream of junk cannot crowd out a real goal.
+        if not inbound.limiter.allow(time.monotonic()):
+            return self._refuse(inbound, f"more than {inbound.rule.max_rate:g} messages/s on {topic}")
         inbound.publisher.publish(msg)
         inbound.accepted += 1
         return ""
