@@ -189,7 +189,7 @@ def test_only_the_bridge_publishes_data_keys_and_only_operators_send_goals(
     assert "mrs_nav/forged" not in tokens
     assert not any(r.ok is not None for r in refused)
     assert [r.ok is not None for r in accepted] == [True]
-    assert robot.inbound == [serialize_goal(1, 2, 0), serialize_goal(3, 4, 0)]
+    assert sorted(robot.inbound) == sorted([serialize_goal(1, 2, 0), serialize_goal(3, 4, 0)])  # put and query race
     assert [k for k, _ in seen if k == topic_key("mrs_nav", GOAL)] == [topic_key("mrs_nav", GOAL)]  # operator's
 
 
