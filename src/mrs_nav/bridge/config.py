@@ -4,8 +4,8 @@ allow-list, validated once into frozen dataclasses.
 The same mapping comes from ROS private parameters or from a YAML file (``config/zenoh_bridge.yaml``
 documents every key). Defaults: peer mode listening on ``tcp/127.0.0.1:7447``, multicast scouting off
 (always: the bridge only talks to endpoints it is given), prefix ``mrs_nav``, every topic out except
-``/rosout*`` and ``/clock``, no rate limit, nothing inbound, the bridge's access control on (remote
-sessions may only put on allow-listed inbound keys) and Zenoh refusing any received message over 1 MiB.
+``/rosout*`` and ``/clock``, no rate limit, nothing inbound, and the bridge's access control on (remote
+sessions may only put on allow-listed inbound keys).
 TLS, authentication and the rest of Zenoh's transport settings come from a Zenoh JSON5 file
 (``zenoh_config``), passed through.
 """
@@ -29,8 +29,6 @@ DEFAULT_DENY = (r"/rosout(_agg)?", r"/clock")
 # often per topic (a person clicking goals) unless its rule says otherwise.
 DEFAULT_INBOUND_BYTES = 1024
 DEFAULT_INBOUND_RATE = 2.0
-# Zenoh drops any message it receives above this size while reassembling it, before the bridge sees it.
-DEFAULT_MAX_MESSAGE_BYTES = 1 << 20
 _ENDPOINT = re.compile(r"^(tcp|udp|tls|quic|ws|unixsock-stream)/\S+$")
 
 
@@ -91,8 +89,7 @@ class BridgeConfig:
     next reconnection attempt. ``zenoh_config`` names a Zenoh JSON5 file (TLS, authentication, ...) whose
     settings the bridge's own (mode, endpoints, scouting) are laid over; ``acl`` adds the bridge's access
     control (:mod:`mrs_nav.bridge.acl`), ``operators`` naming who may send inbound messages (Zenoh usernames
-    or certificate common names; empty: anyone who can connect). ``max_message_bytes`` bounds any message
-    Zenoh reassembles for the bridge.
+    or certificate common names; empty: anyone who can connect).
     """
 
     mode: str = "peer"
@@ -110,7 +107,6 @@ class BridgeConfig:
     zenoh_config: str = ""
     acl: bool = True
     operators: tuple[str, ...] = ()
-    max_message_bytes: int = DEFAULT_MAX_MESSAGE_BYTES
     _rates: tuple[tuple[re.Pattern[str], float], ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -123,8 +119,6 @@ class BridgeConfig:
             raise InvalidInputError("listen and connect are both empty: the bridge would reach nobody")
         if not robot_prefix(self.prefix, self.namespace) and self.layout is KeyLayout.MRS_NAV:
             raise InvalidInputError("prefix is empty: only the zenoh-bridge-ros1 layout works without one")
-        if self.max_message_bytes < 4096:
-            raise InvalidInputError(f"max_message_bytes {self.max_message_bytes!r}: expected at least 4096")
         for name, value in (("discovery_period", self.discovery_period), ("retry_period", self.retry_period)):
             if not math.isfinite(value) or value <= 0:
                 raise InvalidInputError(f"{name} {value!r}: expected a positive number of seconds")
@@ -155,9 +149,8 @@ class BridgeConfig:
 
     def zenoh_settings(self, inbound_md5: Mapping[str, str]) -> dict[str, Any]:
         """Zenoh configuration entries (path -> JSON value) for this bridge (see :func:`zenoh_settings`), with
-        its receive size limit and access control; ``inbound_md5`` maps inbound topics to their md5 sums."""
+        its access control; ``inbound_md5`` maps inbound topics to their md5 sums."""
         settings = zenoh_settings(self.mode, self.listen, self.connect, self.retry_period)
-        settings["transport/link/rx/max_message_size"] = self.max_message_bytes
         if self.acl:
             inbound = [(rule.topic, rule.type, inbound_md5.get(rule.topic, "")) for rule in self.inbound]
             settings["access_control"] = access_control(self.key_prefix, self.layout, inbound, self.operators)
@@ -169,7 +162,6 @@ class BridgeConfig:
         known = {
             "mode", "listen", "connect", "prefix", "namespace", "layout", "allow", "deny", "max_rates",
             "default_max_rate", "inbound", "discovery_period", "retry_period", "zenoh_config", "acl", "operators",
-            "max_message_bytes",
         }  # fmt: skip
         unknown = sorted(set(params) - known - {"config_file"})
         if unknown:
@@ -188,8 +180,6 @@ class BridgeConfig:
             if not isinstance(params["acl"], bool):
                 raise InvalidInputError(f"acl: expected true or false, got {params['acl']!r}")
             kwargs["acl"] = params["acl"]
-        if "max_message_bytes" in params:
-            kwargs["max_message_bytes"] = _integer(params["max_message_bytes"], "max_message_bytes")
         if "layout" in params:
             try:
                 kwargs["layout"] = KeyLayout(params["layout"])

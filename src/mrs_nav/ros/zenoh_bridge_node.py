@@ -391,8 +391,8 @@ class ZenohBridgeNode:
     def _accept(self, topic: str, schema: str, payload: zenoh.ZBytes | None, attachment: zenoh.ZBytes | None) -> str:
         """Check and publish into ROS; return '' on success, else the reason (counted, logged at a bounded rate).
 
-        The cheap checks come first and copy nothing: the allow-list, then the payload's size (Zenoh has
-        already bounded what it reassembles by ``max_message_bytes``); then the content, then the topic's rate.
+        The cheap checks come first and copy nothing out of Zenoh's buffer: the allow-list, then the payload's
+        size; then the content, then the topic's rate.
         """
         inbound = self._inbound.get(topic)
         if inbound is None:

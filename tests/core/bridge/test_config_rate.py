@@ -19,7 +19,6 @@ def test_defaults_are_loopback_peer_with_nothing_inbound() -> None:
     assert config.key_prefix == "mrs_nav"
     settings = config.zenoh_settings({})
     assert settings["scouting/multicast/enabled"] is False
-    assert settings["transport/link/rx/max_message_size"] == 1 << 20
     # The bridge's access control is on: remote sessions may observe, and put on nothing.
     acl = settings["access_control"]
     assert (acl["enabled"], acl["default_permission"]) == (True, "deny")
