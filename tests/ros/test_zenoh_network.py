@@ -310,3 +310,31 @@ def test_the_monitor_from_a_wheel_in_a_fresh_venv(ros_master: RosMaster, rospy_n
     assert (dead.returncode, dead.stdout) == (1, "")
     assert dead.stderr.startswith("ERROR: no bridge under prefix 'mrs_nav'")
     assert len(dead.stderr.strip().splitlines()) == 1
+
+
+def test_zenoh_bridge_ros1_layout_and_discovery_beacons(ros_master: RosMaster, rospy_node: Any, tmp_path: Path) -> None:
+    """What a zenoh-bridge-ros1 (zenoh-plugin-ros1 1.0.0-rc.1) on another master subscribes to: data on
+    ``<hex type>/<md5>/<topic>`` and a beacon every period on ``ros1_discovery_info/*/pub/<hex type>/<md5>/*/<topic>``
+    that stops when the topic has no ROS publisher any more."""
+    from std_msgs.msg import UInt32
+
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    config = {"listen": [endpoint], "prefix": "", "layout": "zenoh-bridge-ros1", "allow": ["/zi/.*"]}
+    head = f"{b'std_msgs/UInt32'.hex()}/{UInt32._md5sum}"
+    with start_bridge(ros_master, tmp_path, "zb_interop", config) as proc:
+        session = open_client_session([endpoint])
+        try:
+            wait_bridge_up(session, proc, "the bridge with zenoh-bridge-ros1's layout")
+            data = Collector(session, "*/*/zi/**")
+            beacons = Collector(session, "ros1_discovery_info/**")
+            with Ticker(rospy_node, "/zi/count", UInt32, UInt32, 20.0):
+                wait_for(lambda: len(data.of(f"{head}/zi/count")) >= 10, 15, "data on the plugin's key")
+                wait_for(lambda: len(beacons.samples) >= 3, 15, "three discovery beacons")
+            stopped = time.monotonic()
+            time.sleep(3.0)  # the plugin forgets a topic after 3 silent beacon periods of 1 s
+        finally:
+            session.close()
+    assert {s[1] for s in beacons.samples} == {f"ros1_discovery_info/*/pub/{head}/*/zi/count"}
+    assert all(s[3] == b"" for s in beacons.samples)
+    assert [s for s in beacons.samples if s[0] > stopped + 1.0] == []  # no beacon once the publisher left
+    assert [int.from_bytes(s[3], "little") for s in data.of(f"{head}/zi/count")][:3] == [0, 1, 2]
