@@ -16,12 +16,12 @@ import pytest
 import zenoh
 import zenoh.ext
 
+from mrs_nav.bench.bridge import connect_when_up, rss_mb
 from mrs_nav.bridge.certs import make_ca, make_cert
 from mrs_nav.bridge.keys import publish_key, status_key
 from mrs_nav.bridge.monitor import serialize_goal
 from mrs_nav.bridge.session import open_client_session
 from mrs_nav.bridge.wire import decode_status, encoding_text
-from mrs_nav.errors import InvalidInputError
 from mrs_nav.ros_processes import process, wait_for_master
 from tests.core.bridge.test_security import Pki, client_file
 from tests.ros.zenoh_harness import Collector, Ticker, mrs_nav, start_bridge, wait_bridge_up
@@ -39,26 +39,6 @@ def bridge_process(env: dict[str, str], tmp: Path, name: str, config: dict[str, 
     path.write_text(json.dumps({"discovery_period": 0.2, **config}))
     cmd = [sys.executable, str(REPO / "scripts" / "zenoh_bridge"), f"__name:={name}", f"_config_file:={path}"]
     return process(cmd, env, tmp / f"{name}.log", grace=10.0)
-
-
-def rss_mb(pid: int) -> float:
-    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-        if line.startswith("VmRSS:"):
-            return int(line.split()[1]) / 1024
-    raise AssertionError(f"no VmRSS for pid {pid}")
-
-
-def client_when_up(endpoint: str, config_file: str, proc: Any) -> zenoh.Session:
-    """A client session to the bridge once its router listens (roslaunch takes a few seconds to start it)."""
-    deadline = time.monotonic() + 30.0
-    while True:
-        assert proc.poll() is None, "roslaunch exited"
-        try:
-            return open_client_session([endpoint], "client", config_file)
-        except InvalidInputError:
-            if time.monotonic() > deadline:
-                raise
-            time.sleep(0.2)
 
 
 def status(session: zenoh.Session) -> dict[str, Any]:
@@ -106,7 +86,7 @@ def test_secured_bridge_as_the_robots_router(ros_master: RosMaster, rospy_node: 
         return msg
 
     with start_bridge(ros_master, tmp_path, "zb_secure", config) as proc:
-        watcher = client_when_up(endpoint, viewer, proc)
+        watcher = connect_when_up(endpoint, viewer, proc)
         forger = watcher  # closed twice at worst if the next line fails
         try:
             forger = open_client_session([endpoint], "client", client_file(tmp_path, pki, "viewer", "view-secret"))
