@@ -70,13 +70,7 @@ def test_secured_bridge_as_the_robots_router(ros_master: RosMaster, rospy_node: 
         json.dumps({"transport": {"link": {"tls": tls}, "auth": {"usrpwd": {"dictionary_file": str(pki.users)}}}})
     )
     endpoint = f"tls/127.0.0.1:{free_port()}"
-    config = {
-        "mode": "router",
-        "listen": [endpoint],
-        "zenoh_config": str(server),
-        "operators": ["operator"],
-        "inbound": [GOAL_RULE],
-    }
+    config = {"operators": ["operator"], "inbound": [GOAL_RULE]}  # the rest as the README's recipe: launch args
     viewer = client_file(tmp_path, pki, "viewer", "view-secret")
 
     def odom(i: int) -> Any:
@@ -85,7 +79,8 @@ def test_secured_bridge_as_the_robots_router(ros_master: RosMaster, rospy_node: 
         msg.pose.pose.position.x, msg.pose.pose.orientation.w = 1.0 + i * 1e-3, 1.0
         return msg
 
-    with start_bridge(ros_master, tmp_path, "zb_secure", config) as proc:
+    args = ("mode:=router", f"listen:={endpoint}", f"zenoh_config:={server}")
+    with start_bridge(ros_master, tmp_path, "zb_secure", config, *args) as proc:
         watcher = connect_when_up(endpoint, viewer, proc)
         forger = watcher  # closed twice at worst if the next line fails
         try:

@@ -17,7 +17,7 @@ from mrs_nav.bridge.config import zenoh_settings
 from mrs_nav.bridge.dashboard import render, summarise
 from mrs_nav.bridge.decoder import noetic_store
 from mrs_nav.bridge.keys import topic_key, types_key
-from mrs_nav.bridge.monitor import RemoteMonitor
+from mrs_nav.bridge.monitor import RemoteMonitor, TopicStats
 from mrs_nav.bridge.session import open_session
 from mrs_nav.bridge.snapshot import draw_snapshot
 from mrs_nav.bridge.wire import encode_attachment, encode_definition, encoding_text
@@ -139,3 +139,21 @@ def test_send_goal_without_a_bridge_says_nobody_answered(bridge: tuple[FakeBridg
         accepted, answer = monitor.send_goal(1.0, 2.0, 0.0)
     assert not accepted
     assert "no bridge" in answer
+
+
+def test_a_topic_is_stale_without_its_publisher_or_after_three_silent_periods() -> None:
+    stats = TopicStats(alive=True, received_ns=10_000_000_000)
+    stats.arrivals.extend([0.0, 0.1, 0.2])  # 10 Hz
+    assert stats.age_s(10_250_000_000) == pytest.approx(0.25)
+    assert not stats.stale(0.25, 10_250_000_000)
+    assert stats.stale(0.6, 10_400_000_000)  # 0.4 s silent > 3 periods of 0.1 s
+    latched = TopicStats(alive=True, received_ns=1_000_000_000)
+    latched.arrivals.append(0.0)  # one cached map, 34 s old but its publisher lives: live, with its age shown
+    assert not latched.stale(34.0, 35_000_000_000)
+    assert latched.age_s(35_000_000_000) == pytest.approx(34.0)
+    latched.alive = False  # the token went with the publisher
+    assert latched.stale(34.0, 35_000_000_000)
+    summary = summarise({}, {"/map": latched}, 34.0, 35_000_000_000)
+    assert summary["topics"]["/map"]["stale"] is True
+    assert summary["topics"]["/map"]["age_s"] == pytest.approx(34.0)
+    assert "STALE" in render(summary)
