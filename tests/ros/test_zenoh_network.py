@@ -313,3 +313,17 @@ def test_zenoh_bridge_ros1_layout_and_discovery_beacons(ros_master: RosMaster, r
     assert all(s[3] == b"" for s in beacons.samples)
     assert [s for s in beacons.samples if s[0] > stopped + 1.0] == []  # no beacon once the publisher left
     assert [int.from_bytes(s[3], "little") for s in data.of(f"{head}/zi/count")][:3] == [0, 1, 2]
+
+
+def test_a_tls_endpoint_without_certificates_stops_the_node_with_one_line(
+    ros_master: RosMaster, tmp_path: Path
+) -> None:
+    config = {"listen": [f"tls/127.0.0.1:{free_port()}"]}
+    with bridge_process(ros_master.env, tmp_path, "zb_no_certs", config) as bridge:
+        code = bridge.wait(timeout=60)
+    log = (tmp_path / "zb_no_certs.log").read_text()
+    fatal = [line for line in log.splitlines() if "[FATAL]" in line]
+    assert code == 1
+    assert len(fatal) == 1
+    assert "needs transport.link.tls.listen_certificate and listen_private_key" in fatal[0]
+    assert "Traceback" not in log
