@@ -6,9 +6,16 @@ Every parser raises :class:`InvalidInputError` naming the option, so each front 
 
 from __future__ import annotations
 
+import argparse
 import math
+import re
+from collections.abc import Callable
 
 from mrs_nav.errors import InvalidInputError
+from mrs_nav.limits import MAX_BUDGET_S, MAX_ITERATIONS, MAX_ROBOT_RADIUS_M, MAX_SEED
+
+_INTEGER = re.compile(r"[+-]?\d+")
+_MAX_DIGITS = 30
 
 
 def parse_floats(text: str, count: int | tuple[int, ...], what: str) -> tuple[float, ...]:
@@ -24,3 +31,50 @@ def parse_floats(text: str, count: int | tuple[int, ...], what: str) -> tuple[fl
     if not all(math.isfinite(v) for v in values):
         raise InvalidInputError(f"{what}: numbers must be finite, got {text!r}")
     return values
+
+
+def integer_option(minimum: int, maximum: int) -> Callable[[str], int]:
+    """An argparse ``type=`` that takes a base-10 integer in ``[minimum, maximum]``.
+
+    argparse names the option in front of the message; past the stated maximum the option is refused, never
+    clamped.
+    """
+
+    def parse(text: str) -> int:
+        text = text.strip()
+        if not _INTEGER.fullmatch(text):
+            raise argparse.ArgumentTypeError(f"expected an integer, got {text[:40]!r}")
+        # int() refuses thousands of digits, and a count with that many is out of range anyway.
+        if len(text) > _MAX_DIGITS or not minimum <= int(text) <= maximum:
+            shown = text if len(text) <= _MAX_DIGITS else f"{text[:20]}... ({len(text)} digits)"
+            raise argparse.ArgumentTypeError(f"must be an integer in [{minimum}, {maximum}], got {shown}")
+        return int(text)
+
+    parse.__name__ = "integer"
+    return parse
+
+
+def number_option(minimum: float, maximum: float) -> Callable[[str], float]:
+    """An argparse ``type=`` that takes a finite number in ``[minimum, maximum]``."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a number, got {text[:40]!r}") from None
+        if not (math.isfinite(value) and minimum <= value <= maximum):
+            raise argparse.ArgumentTypeError(f"must be a finite number in [{minimum:g}, {maximum:g}], got {text}")
+        return value
+
+    parse.__name__ = "number"
+    return parse
+
+
+#: ``--seed``: numpy's and ODE's seeds are unsigned 32-bit.
+seed_option = integer_option(0, MAX_SEED)
+#: Iteration and step counts.
+count_option = integer_option(1, MAX_ITERATIONS)
+#: Planner time budgets and timeouts, seconds.
+budget_option = number_option(1e-3, MAX_BUDGET_S)
+#: Obstacle inflation, metres.
+radius_option = number_option(0.0, MAX_ROBOT_RADIUS_M)

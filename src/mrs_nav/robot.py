@@ -7,6 +7,8 @@ saturate to).
 
 #: Footprint radius (m).
 BURGER_RADIUS = 0.105
+#: Overall height (m): a world's obstacle must reach below it to stand in the robot's way.
+BURGER_HEIGHT = 0.192
 #: Top linear speed (m/s).
 BURGER_MAX_LINEAR = 0.22
 #: Top angular speed (rad/s).

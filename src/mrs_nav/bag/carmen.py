@@ -52,7 +52,7 @@ def parse_flaser(line: str, where: str = "line") -> CarmenScan:
         ranges = np.array([float(v) for v in fields[2 : 2 + n]], dtype=np.float64)
         x, y, th, ox, oy, oth, stamp = (float(v) for v in fields[2 + n : 2 + n + 7])
         return CarmenScan(stamp, ranges, Pose2D(x, y, th), Pose2D(ox, oy, oth))
-    except ValueError as err:
+    except (ValueError, IndexError) as err:  # IndexError: a line with nothing after "FLASER"
         raise InvalidInputError(f"{where}: malformed FLASER line ({err})") from None
 
 

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any, BinaryIO
 
 from lz4.frame import decompress as lz4_decompress  # type: ignore[import-untyped]
-from rosbags.rosbag1 import Writer
+from rosbags.rosbag1 import Writer, WriterError
 
 from mrs_nav.errors import BagError
 
@@ -79,9 +79,7 @@ def is_unindexed(path: Path) -> bool:
     if record is None:
         return True  # the bag header itself is incomplete: nothing indexed
     fields, _ = record
-    return (
-        fields.get("op") == bytes([OP_BAG_HEADER]) and struct.unpack("<Q", fields.get("index_pos", b"\0" * 8))[0] == 0
-    )
+    return fields.get("op") == bytes([OP_BAG_HEADER]) and _u64(fields.get("index_pos")) == 0
 
 
 def salvage_bag(source: Path, output: Path) -> SalvageReport:
@@ -99,18 +97,22 @@ def salvage_bag(source: Path, output: Path) -> SalvageReport:
                 raise BagError(f"bag {source} is not a ROS 1 bag (format 2.0): its first line is not {MAGIC!r}")
             used = f.tell()
             for fields, data in _records(f):
-                op = fields.get("op", b"\xff")[0]
-                if op == OP_CHUNK:
-                    try:
-                        payload = _decompress(fields, data)
-                        inner = list(_records_in(payload))
-                    except (ValueError, OSError, RuntimeError, EOFError, struct.error):
-                        break  # a chunk that does not decompress or parse ends what can be trusted
-                    chunks += 1
-                    for inner_fields, inner_data in inner:
-                        _collect(inner_fields, inner_data, connections, messages)
-                else:
-                    _collect(fields, data, connections, messages)
+                # A record or chunk that does not decompress or parse ends what can be trusted: everything
+                # before it is kept, nothing after it is guessed at.
+                found_connections: dict[int, _Connection] = {}
+                found_messages: list[tuple[int, int, bytes]] = []
+                try:
+                    if fields.get("op", b"\xff")[:1] == bytes([OP_CHUNK]):
+                        for inner_fields, inner_data in _records_in(_decompress(fields, data)):
+                            _collect(inner_fields, inner_data, found_connections, found_messages)
+                        chunks += 1
+                    else:
+                        _collect(fields, data, found_connections, found_messages)
+                except _DAMAGE:
+                    break
+                for conn_id, conn in found_connections.items():
+                    connections.setdefault(conn_id, conn)
+                messages += found_messages
                 used = f.tell()
     except OSError as err:
         raise BagError(f"cannot read bag {source}: {err.strerror}") from None
@@ -120,9 +122,14 @@ def salvage_bag(source: Path, output: Path) -> SalvageReport:
     return SalvageReport(source, output, chunks, len(messages), len(connections), used, total)
 
 
+# What a damaged (bit-flipped, cut) record or chunk raises while it is decoded.
+_DAMAGE = (ValueError, KeyError, IndexError, OSError, RuntimeError, EOFError, struct.error)
+
+
 def _collect(
     fields: dict[str, bytes], data: bytes, connections: dict[int, _Connection], messages: list[tuple[int, int, bytes]]
 ) -> None:
+    """Add a connection or message record; raises one of :data:`_DAMAGE` when the record is malformed."""
     op = fields.get("op", b"\xff")[0]
     if op == OP_CONNECTION:
         conn_id = struct.unpack("<I", fields["conn"])[0]
@@ -154,24 +161,32 @@ def _write(output: Path, connections: dict[int, _Connection], messages: list[tup
     except OSError as err:
         raise BagError(f"cannot write the rebuilt bag {output}: {err.strerror}") from None
     try:
-        added: dict[int, Any] = {}
-        by_args: dict[_Connection, Any] = {}
-        for conn_id, conn in sorted(connections.items()):
-            if conn not in by_args:  # rosbags refuses two connections with identical arguments
-                by_args[conn] = writer.add_connection(
-                    conn.topic,
-                    conn.msgtype,
-                    msgdef=conn.msgdef,
-                    md5sum=conn.md5sum,
-                    callerid=conn.callerid,
-                    latching=conn.latching,
-                )
-            added[conn_id] = by_args[conn]
-        for conn_id, stamp, data in messages:
-            if conn_id in added:  # a message whose connection record was lost cannot be typed
-                writer.write(added[conn_id], stamp, data)
+        _write_records(writer, connections, messages)
+    except (WriterError, ValueError, KeyError) as err:
+        # connection records that parsed but that rosbags cannot write (a damaged type name or md5)
+        raise BagError(f"cannot rebuild bag into {output}: a connection record is damaged ({err})") from None
     finally:
         writer.close()
+
+
+def _write_records(writer: Writer, connections: dict[int, _Connection], messages: list[tuple[int, int, bytes]]) -> None:
+    """Add each distinct connection once and the messages whose connection is known."""
+    added: dict[int, Any] = {}
+    by_args: dict[_Connection, Any] = {}
+    for conn_id, conn in sorted(connections.items()):
+        if conn not in by_args:  # rosbags refuses two connections with identical arguments
+            by_args[conn] = writer.add_connection(
+                conn.topic,
+                conn.msgtype,
+                msgdef=conn.msgdef,
+                md5sum=conn.md5sum,
+                callerid=conn.callerid,
+                latching=conn.latching,
+            )
+        added[conn_id] = by_args[conn]
+    for conn_id, stamp, data in messages:
+        if conn_id in added:  # a message whose connection record was lost cannot be typed
+            writer.write(added[conn_id], stamp, data)
 
 
 def _normalize(msgtype: str) -> str:
@@ -246,14 +261,25 @@ def _records_in(payload: bytes) -> Iterator[tuple[dict[str, bytes], bytes]]:
         pos = start + data_len
 
 
+def _u64(value: bytes | None) -> int:
+    """A little-endian unsigned header field (4 or 8 bytes); 0 when absent or of another length."""
+    if value is None or len(value) not in (4, 8):
+        return 0
+    return int.from_bytes(value, "little")
+
+
 def readable_bag(path: Path, workdir: Path) -> tuple[Path, str | None]:
     """A path rosbags can read for ``path``, and a note for the user when it had to be rebuilt.
 
     An unindexed bag (a recording cut short) is salvaged into ``workdir``; a closed bag cut short (its index
     lies past its end) or anything that is not a bag raises :class:`BagError` naming what is missing.
     """
-    if not path.is_file():
+    if not path.exists():
         raise BagError(f"bag {path} does not exist")
+    if path.is_dir():
+        raise BagError(f"bag {path} is a folder, not a bag file")
+    if not path.is_file():
+        raise BagError(f"bag {path} is not a regular file (a device, FIFO or socket cannot be a bag)")
     if is_unindexed(path):
         report = salvage_bag(path, workdir / f"{path.name.removesuffix('.active')}.salvaged.bag")
         return report.output, report.describe()
@@ -262,8 +288,11 @@ def readable_bag(path: Path, workdir: Path) -> tuple[Path, str | None]:
         if f.readline() != MAGIC:
             raise BagError(f"bag {path} is not a ROS 1 bag (format 2.0): its first line is not {MAGIC!r}")
         record = _read_record(f)
-    index_pos = struct.unpack("<Q", record[0].get("index_pos", b"\0" * 8))[0] if record else 0
-    if index_pos >= size:
+    header = record[0] if record else {}
+    index_pos = _u64(header.get("index_pos"))
+    # A bag with no messages (closed normally) has its (empty) index at the very end of the file.
+    empty = _u64(header.get("chunk_count")) == 0 and _u64(header.get("conn_count")) == 0
+    if index_pos > size or (index_pos == size and not empty):
         raise BagError(
             f"bag {path} is truncated: its index should start at byte {index_pos} but the file ends at byte "
             f"{size} (the index and the last chunks are missing)"

@@ -27,12 +27,12 @@ from typing import Any
 
 import numpy as np
 
-from mrs_nav.bench.results import markdown_table
 from mrs_nav.bridge.certs import make_ca, make_cert
 from mrs_nav.bridge.session import open_client_session
 from mrs_nav.errors import MrsNavError
 from mrs_nav.resources import CHECKOUT
 from mrs_nav.ros_processes import RosProcessError, free_port, process, roscore
+from mrs_nav.tables import markdown_table
 
 TOPICS = {"/odom": 100.0, "/scan": 5.0, "/map": 1.0}
 SUBSCRIBERS = 5

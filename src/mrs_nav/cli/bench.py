@@ -21,7 +21,9 @@ BENCHMARKS = {
     "slam": "slam",
     "navigation": "navigation",
     "replay": "replay",
+    "replay-batch": "replay_batch",
     "bridge": "bridge",
+    "soak": "soak",
 }
 
 

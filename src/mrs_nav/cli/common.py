@@ -5,11 +5,52 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
+import tempfile
 from collections.abc import Callable
-from typing import Any
+from pathlib import Path
+from typing import Any, NoReturn
+
+from mrs_nav.errors import InvalidInputError
 
 Handler = Callable[[argparse.Namespace], int]
+
+
+class Parser(argparse.ArgumentParser):
+    """An argument parser whose usage errors raise :class:`InvalidInputError`: one ``ERROR:`` line and exit 1.
+
+    argparse's own exit status 2 would collide with the documented "ran but did not reach the goal". Subparsers
+    made by ``add_subparsers`` are of the same class, so every subcommand behaves alike.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        # Let "--start -1.5,-1.5,0" through as a value: argparse takes only plain numbers like "-1.5" for negative
+        # values, and would read a comma-separated list starting with "-" as an unknown option.
+        self._negative_number_matcher = re.compile(r"^-\.?\d")
+
+    def error(self, message: str) -> NoReturn:
+        raise InvalidInputError(f"{self.prog}: {message} (see {self.prog} --help)")
+
+
+def check_writable(path: Path, what: str, *, folder: bool = False) -> Path:
+    """``path`` when an output can be written there (a folder, created now, or a file in one); else an error.
+
+    Checked before the work so that an unwritable ``--out`` or ``--png`` fails at once, not after a long run.
+    A scratch file is really created (and removed): permission bits alone say nothing for root or odd file
+    systems such as /proc.
+    """
+    target = path if folder else path.parent
+    if not folder and path.is_dir():
+        raise InvalidInputError(f"{what}: {path} is a folder, expected a file name")
+    try:
+        target.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=target):
+            pass
+    except OSError as err:
+        raise InvalidInputError(f"{what}: cannot write into {target}: {err.strerror}") from None
+    return path
 
 
 def print_json(payload: dict[str, Any]) -> None:

@@ -10,12 +10,15 @@ from typing import Any
 from tqdm import tqdm
 
 from mrs_nav.bag.session import SessionBag
-from mrs_nav.cli.common import print_json
+from mrs_nav.cli.common import check_writable, print_json
+from mrs_nav.cli.plan import check_free
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
+from mrs_nav.limits import MAX_BUDGET_S, MAX_SEED
 from mrs_nav.maps.map_io import save_map
+from mrs_nav.maps.obstacles import Obstacles
 from mrs_nav.maps.world import load_world
-from mrs_nav.options import parse_floats
+from mrs_nav.options import budget_option, parse_floats, seed_option
 from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.stack.demo import Demo, DemoConfig, save_figure
 
@@ -65,10 +68,22 @@ def register(subparsers: Any) -> None:
     parser.add_argument("--start", default=None, help="start pose x,y,yaw in m, m, rad (default per world)")
     parser.add_argument("--goals", default=None, help='goals "x,y;x,y" in m, map frame (default per world)')
     parser.add_argument("--out", type=Path, default=Path("demo_out"), help="output folder (default: demo_out)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the simulator noise and the planner")
-    parser.add_argument("--goal-timeout", type=float, default=240.0, help="sim seconds allowed per goal")
+    parser.add_argument(
+        "--seed", type=seed_option, default=0, help=f"seed of the simulator noise and the planner, 0..{MAX_SEED}"
+    )
+    parser.add_argument(
+        "--goal-timeout",
+        type=budget_option,
+        default=240.0,
+        help=f"sim seconds allowed per goal, at most {MAX_BUDGET_S:g}",
+    )
     parser.add_argument("--planner", choices=("rrt_star", "rrt"), default="rrt_star")
-    parser.add_argument("--time-budget", type=float, default=0.25, help="planner budget per plan, wall s")
+    parser.add_argument(
+        "--time-budget",
+        type=budget_option,
+        default=0.25,
+        help=f"planner budget per plan, wall s, at most {MAX_BUDGET_S:g}",
+    )
     parser.add_argument("--no-bag", action="store_true", help="do not record the bag")
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     parser.set_defaults(handler=run)
@@ -90,8 +105,10 @@ def run(args: argparse.Namespace) -> int:
         plan_time_budget_s=args.time_budget,
     )
     world = load_world(world_path)
-    out: Path = args.out
-    out.mkdir(parents=True, exist_ok=True)
+    # A start outside the world or inside an obstacle fails here, before the run, as `plan` fails on it. Goals are
+    # the navigator's to refuse on the map SLAM builds, as a click into an obstacle in rviz would be.
+    check_free(Obstacles.from_world(world), world.bounds(), "--start", start.x, start.y)
+    out: Path = check_writable(args.out, "--out", folder=True)
     bag_path = None if args.no_bag else out / "session.bag"
     demo = Demo(world, config)
     progress = _progress_bar(len(goals))

@@ -1,8 +1,10 @@
 """Entry point of ``mrs-nav``: one subcommand per module in :mod:`mrs_nav.cli`.
 
 Each subcommand module exposes ``register(subparsers)``, which adds its parser and sets ``handler`` to a
-typed function returning the exit code. Domain errors (:class:`MrsNavError`) become one ``ERROR:`` line and
-exit 1; anything else is a bug and keeps its traceback.
+typed function returning the exit code. Domain errors (:class:`MrsNavError`), usage errors and files that
+cannot be written become one ``ERROR:`` line and exit 1; exit 2 means only "ran but did not reach the goal";
+anything else is a bug and keeps its traceback. SIGTERM and SIGHUP unwind like Ctrl-C, so temporary folders
+are removed and partial outputs closed when the command is killed (SIGKILL cannot be caught).
 
 Only the module of the command being run is imported, so that ``mrs-nav monitor`` works in a monitor-only
 install (``pip install "mrs_nav[monitor]"``: no ROS, ODE, scipy or yaml); there the other commands are listed
@@ -14,18 +16,20 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
 from collections.abc import Sequence
+from types import FrameType
 
 from mrs_nav import __version__
-from mrs_nav.cli.common import fail
+from mrs_nav.cli.common import Parser, fail
 from mrs_nav.errors import MrsNavError
 
 SUBCOMMANDS = ("demo", "figures", "plan", "replay", "carmen2bag", "bench", "monitor")
 
 
 def build_parser(commands: Sequence[str] = SUBCOMMANDS) -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="mrs-nav",
         description="mrs_nav offline tools: simulate, plan, replay bags, benchmark and monitor; no ROS master needed.",
     )
@@ -44,20 +48,34 @@ def build_parser(commands: Sequence[str] = SUBCOMMANDS) -> argparse.ArgumentPars
     return parser
 
 
+def _interrupt(signum: int, _frame: FrameType | None) -> None:
+    raise KeyboardInterrupt(signal.Signals(signum).name)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     command = next((a for a in argv if not a.startswith("-")), None)
     parser = build_parser((command,) if command in SUBCOMMANDS else SUBCOMMANDS)
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except MrsNavError as err:
+        return fail(str(err))
     if args.command is None:
         parser.print_help()
         return 1
+    for signum in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(signum, _interrupt)
     try:
         code: int = args.handler(args)
     except MrsNavError as err:
         return fail(str(err))
-    except KeyboardInterrupt:
-        return fail("interrupted", 130)
+    except KeyboardInterrupt as err:
+        return fail(f"interrupted ({err})" if err.args else "interrupted", 130)
+    except (PermissionError, FileNotFoundError, IsADirectoryError, NotADirectoryError, FileExistsError) as err:
+        # A file the user named cannot be opened or written: the environment's fault, not a bug.
+        if err.filename is None:
+            raise
+        return fail(f"{err.filename}: {err.strerror}")
     except BrokenPipeError:
         # The reader went away (`mrs-nav plan --json | head`): nothing is wrong with the command. Point stdout at
         # /dev/null so that Python's own flush at exit does not raise again.

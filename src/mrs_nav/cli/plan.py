@@ -8,7 +8,6 @@ arguments, the start pose and the goal returning a :class:`~mrs_nav.planning.Pla
 from __future__ import annotations
 
 import argparse
-import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -19,9 +18,10 @@ from mrs_nav.errors import InvalidInputError
 from mrs_nav.fields.potential_field import Bounds, PotentialField, workspace_bounds
 from mrs_nav.fields.randomized_potential_field import EscapeSettings, plan_potential_field
 from mrs_nav.geometry import Pose2D
+from mrs_nav.limits import MAX_ITERATIONS, MAX_SEED
 from mrs_nav.maps.obstacles import Obstacles
 from mrs_nav.maps.world import load_world
-from mrs_nav.options import parse_floats
+from mrs_nav.options import count_option, parse_floats, seed_option
 from mrs_nav.planning import PlanResult
 
 Planner = Callable[[argparse.Namespace, Pose2D, tuple[float, float]], PlanResult]
@@ -34,10 +34,18 @@ def load_obstacles(args: argparse.Namespace) -> tuple[Obstacles, Bounds | None]:
         return Obstacles.from_world(world), world.bounds()
     if args.circles is not None:
         text: str = args.circles
-        if not text.lstrip().startswith("[") and Path(text).is_file():
+        if not text.lstrip().startswith("[") and _is_file(text):
             return Obstacles.from_json_file(text), None
         return Obstacles.from_json(text, "--circles"), None
     raise InvalidInputError("the potential field needs obstacles: give --world or --circles")
+
+
+def _is_file(text: str) -> bool:
+    """Whether ``text`` names an existing file (a name too long for the system is JSON text, not a file)."""
+    try:
+        return Path(text).is_file()
+    except OSError:
+        return False
 
 
 def check_free(obstacles: Obstacles, bounds: Bounds | None, what: str, x: float, y: float) -> None:
@@ -71,9 +79,6 @@ def register(subparsers: Any) -> None:
         help="one planning query on a map, a world or a list of circles",
         description="Plan from --start to --goal. Exit 0 when the goal is reached, 2 when not, 1 on bad input.",
     )
-    # Let "--start -1.5,-1.5,0" through: argparse takes only plain numbers like "-1.5" for negative values, and
-    # would read a comma-separated list starting with "-" as an unknown option.
-    parser._negative_number_matcher = re.compile(r"^-\.?\d")
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--world", type=Path, help="Gazebo SDF .world file (its boxes and cylinders)")
     source.add_argument("--map", type=Path, help="rrt / rrt_star: map_server map description (.yaml with its .pgm)")
@@ -83,9 +88,12 @@ def register(subparsers: Any) -> None:
     parser.add_argument("--planner", choices=sorted(PLANNERS), default="potential_field")
     parser.add_argument("--start", required=True, metavar="X,Y[,YAW]", help="start pose (m, m, rad)")
     parser.add_argument("--goal", required=True, metavar="X,Y", help="goal position (m)")
-    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument("--seed", type=seed_option, default=0, help=f"random seed, 0..{MAX_SEED} (default 0)")
     parser.add_argument(
-        "--max-steps", type=int, default=EscapeSettings().max_steps, help="potential field: integration steps"
+        "--max-steps",
+        type=count_option,
+        default=EscapeSettings().max_steps,
+        help=f"potential field: integration steps, 1..{MAX_ITERATIONS}",
     )
     tree_planners.add_arguments(parser)
     parser.add_argument("--json", action="store_true", help="print the result as one JSON object")

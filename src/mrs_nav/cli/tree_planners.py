@@ -12,12 +12,15 @@ from pathlib import Path
 
 import numpy as np
 
+from mrs_nav.cli.common import check_writable
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
+from mrs_nav.limits import MAX_BUDGET_S, MAX_ITERATIONS, MAX_ROBOT_RADIUS_M, MAX_SIZE_M
 from mrs_nav.maps.map_io import load_map
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.maps.rasterize import DEFAULT_RESOLUTION, rasterize_world
 from mrs_nav.maps.world import load_world
+from mrs_nav.options import budget_option, count_option, number_option, radius_option
 from mrs_nav.planning import PlanResult
 from mrs_nav.robot import BURGER_RADIUS
 from mrs_nav.trees.rrt import RRTConfig, grow_rrt
@@ -26,6 +29,8 @@ from mrs_nav.trees.tree import Search
 
 #: RRT* runs for this long when neither --time-budget nor --iterations is given (seconds).
 DEFAULT_STAR_BUDGET = 0.5
+#: --resolution range, metres per cell: finer than a millimetre or coarser than 10 m is not a map of a building.
+MIN_RESOLUTION_M, MAX_RESOLUTION_M = 1e-3, 10.0
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -33,30 +38,38 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("rrt / rrt_star")
     group.add_argument(
         "--time-budget",
-        type=float,
+        type=budget_option,
         default=None,
         metavar="S",
-        help=f"planning time in seconds (rrt_star default {DEFAULT_STAR_BUDGET} s; rrt: none)",
+        help=f"planning time, at most {MAX_BUDGET_S:g} s (rrt_star default {DEFAULT_STAR_BUDGET} s; rrt: none)",
     )
     group.add_argument(
-        "--iterations", type=int, default=None, metavar="N", help="samples to draw (rrt default 2000; rrt_star: none)"
+        "--iterations",
+        type=count_option,
+        default=None,
+        metavar="N",
+        help=f"samples to draw, at most {MAX_ITERATIONS} (rrt default 2000; rrt_star: none)",
     )
     group.add_argument(
         "--robot-radius",
-        type=float,
+        type=radius_option,
         default=BURGER_RADIUS,
         metavar="R",
-        help=f"obstacles are inflated by this radius in metres (default {BURGER_RADIUS})",
+        help=f"obstacles are inflated by this radius, at most {MAX_ROBOT_RADIUS_M:g} m (default {BURGER_RADIUS})",
     )
     group.add_argument(
         "--resolution",
-        type=float,
+        type=number_option(MIN_RESOLUTION_M, MAX_RESOLUTION_M),
         default=DEFAULT_RESOLUTION,
         metavar="M",
-        help=f"cell size when rasterising --world, metres (default {DEFAULT_RESOLUTION})",
+        help=f"cell size for --world, {MIN_RESOLUTION_M:g}..{MAX_RESOLUTION_M:g} m (default {DEFAULT_RESOLUTION})",
     )
     group.add_argument(
-        "--min-turning-radius", type=float, default=0.0, metavar="R", help="reject tighter arcs (metres; default 0)"
+        "--min-turning-radius",
+        type=number_option(0.0, MAX_SIZE_M),
+        default=0.0,
+        metavar="R",
+        help="reject tighter arcs (metres; default 0)",
     )
     group.add_argument("--png", type=Path, default=None, metavar="FILE", help="draw the map, tree and path")
 
@@ -71,8 +84,8 @@ def load_grid(args: argparse.Namespace) -> OccupancyGrid:
 
 
 def _inflated(args: argparse.Namespace) -> tuple[OccupancyGrid, OccupancyGrid]:
-    if not (np.isfinite(args.robot_radius) and args.robot_radius >= 0.0):
-        raise InvalidInputError(f"--robot-radius must be finite and >= 0, got {args.robot_radius}")
+    if args.png is not None:
+        check_writable(args.png, "--png")
     grid = load_grid(args)
     return grid, grid.inflate(args.robot_radius)
 

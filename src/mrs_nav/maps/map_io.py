@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import re
+import stat
 from pathlib import Path
 from typing import Any
 
@@ -21,10 +22,15 @@ import numpy.typing as npt
 import yaml
 
 from mrs_nav.errors import InvalidInputError, MapFileError
+from mrs_nav.limits import MAX_IMAGE_BYTES, check_grid_cells
 from mrs_nav.maps.occupancy_grid import FREE_MAX, OCCUPIED, OCCUPIED_MIN, UNKNOWN, OccupancyGrid
 
 _SAVE_FREE, _SAVE_OCCUPIED, _SAVE_UNKNOWN = 254, 0, 205
 _MODES = ("trinary", "scale", "raw")
+# A map description holds a handful of keys; anything this large is not one.
+_MAX_YAML_BYTES = 1 << 20
+# A YAML 1.2 float that YAML 1.1 (PyYAML) leaves as a string, e.g. 5e-2 or 1E3.
+_YAML12_FLOAT = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 
 
 def _number(meta: dict[str, Any], key: str, where: Path, default: float | None = None) -> float:
@@ -33,9 +39,28 @@ def _number(meta: dict[str, Any], key: str, where: Path, default: float | None =
             raise MapFileError(f"{where}: missing key {key!r}")
         return default
     value = meta[key]
+    if isinstance(value, str) and _YAML12_FLOAT.fullmatch(value.strip()):
+        value = float(value)  # YAML 1.1 reads 5e-2 (no dot) as text; map_server's YAML 1.2 reader takes it
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
         raise MapFileError(f"{where}: {key} must be a finite number, got {value!r}")
     return float(value)
+
+
+def _read_regular(path: Path, limit: int, what: str) -> bytes:
+    """The bytes of ``path`` when it is a regular file of at most ``limit`` bytes.
+
+    A device (``/dev/zero``, ``/dev/urandom``) or a FIFO would otherwise be read without end.
+    """
+    try:
+        info = path.stat()
+        if not stat.S_ISREG(info.st_mode):
+            raise MapFileError(f"{path}: cannot read {what}: not a regular file")
+        if info.st_size > limit:
+            raise MapFileError(f"{path}: {what} is {info.st_size} bytes, above the limit of {limit}")
+        with path.open("rb") as f:
+            return f.read(limit + 1)
+    except OSError as err:
+        raise MapFileError(f"{path}: cannot read {what}: {err.strerror or err}") from err
 
 
 def read_pgm(path: Path) -> npt.NDArray[np.int32]:
@@ -43,17 +68,21 @@ def read_pgm(path: Path) -> npt.NDArray[np.int32]:
 
     The array is scaled to 0..255 when maxval differs from 255.
     """
-    try:
-        data = path.read_bytes()
-    except OSError as err:
-        raise MapFileError(f"{path}: cannot read map image: {err.strerror or err}") from err
+    data = _read_regular(path, MAX_IMAGE_BYTES, "map image")
     # Header: magic, width, height, maxval, separated by whitespace, with # comments; one whitespace byte ends it.
-    header = re.match(rb"(P[25])((?:\s+|#[^\n]*\n)+)(\d+)((?:\s+|#[^\n]*\n)+)(\d+)((?:\s+|#[^\n]*\n)+)(\d+)\s", data)
+    # At most 9 digits per number: Python refuses to convert thousands of digits, and no valid size needs more.
+    header = re.match(
+        rb"(P[25])((?:\s+|#[^\n]*\n)+)(\d{1,9})((?:\s+|#[^\n]*\n)+)(\d{1,9})((?:\s+|#[^\n]*\n)+)(\d{1,9})\s", data
+    )
     if header is None:
         raise MapFileError(f"{path}: not a PGM image (expected a P5 or P2 header)")
     magic, width, height, maxval = header.group(1), int(header.group(3)), int(header.group(5)), int(header.group(7))
     if width < 1 or height < 1 or not 0 < maxval < 65536:
         raise MapFileError(f"{path}: bad PGM size {width}x{height} or maxval {maxval}")
+    try:
+        check_grid_cells(width, height, f"{path}: PGM size")
+    except InvalidInputError as err:
+        raise MapFileError(str(err)) from None
     body = data[header.end() :]
     count = width * height
     if magic == b"P5":
@@ -79,13 +108,15 @@ def read_pgm(path: Path) -> npt.NDArray[np.int32]:
 
 def _parse_yaml(path: Path) -> dict[str, Any]:
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as err:
+        text = _read_regular(path, _MAX_YAML_BYTES, "map description").decode("utf-8")
+    except UnicodeDecodeError as err:
         raise MapFileError(f"{path}: cannot read map description: {err}") from err
     try:
         meta = yaml.safe_load(text)
     except yaml.YAMLError as err:
         raise MapFileError(f"{path}: malformed YAML: {' '.join(str(err).split())}") from err
+    except RecursionError:
+        raise MapFileError(f"{path}: malformed YAML: nested too deeply") from None
     if not isinstance(meta, dict):
         raise MapFileError(f"{path}: expected a YAML mapping with image, resolution and origin")
     return meta

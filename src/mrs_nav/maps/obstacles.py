@@ -27,9 +27,26 @@ import numpy.typing as npt
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray
+from mrs_nav.limits import MAX_COORDINATE_M, MAX_SHAPES, MAX_SIZE_M
 from mrs_nav.maps.world import World
 
 BoolArray = npt.NDArray[np.bool_]
+# An obstacle list of MAX_SHAPES circles is a few tens of kilobytes of JSON.
+_MAX_JSON_BYTES = 1 << 20
+
+
+def _as_float(value: float) -> float:
+    """``float(value)``, or inf for an integer beyond float range (rejected as non-finite like any other)."""
+    try:
+        return float(value)
+    except OverflowError:
+        return math.inf
+
+
+def _excerpt(item: Any) -> str:
+    """``repr(item)`` cut to one readable line."""
+    text = repr(item)
+    return text if len(text) <= 80 else text[:77] + "..."
 
 
 def _frozen(array: npt.ArrayLike, columns: int) -> FloatArray:
@@ -60,9 +77,19 @@ class Obstacles:
             bad = np.flatnonzero(~np.isfinite(rows).all(axis=1))
             if bad.size:
                 raise InvalidInputError(f"{what} {bad[0]} has a non-finite value: {rows[bad[0]].tolist()}")
-            bad = np.flatnonzero((sizes <= 0.0).any(axis=1))
+            bad = np.flatnonzero((sizes <= 0.0).any(axis=1) | (sizes > MAX_SIZE_M).any(axis=1))
             if bad.size:
-                raise InvalidInputError(f"{what} {bad[0]} must have a positive size, got {rows[bad[0]].tolist()}")
+                raise InvalidInputError(
+                    f"{what} {bad[0]} must have a positive size of at most {MAX_SIZE_M:g} m, "
+                    f"got {rows[bad[0]].tolist()}"
+                )
+            bad = np.flatnonzero((np.abs(rows[:, :2]) > MAX_COORDINATE_M).any(axis=1))
+            if bad.size:
+                raise InvalidInputError(
+                    f"{what} {bad[0]} lies more than {MAX_COORDINATE_M:g} m from the origin: {rows[bad[0]].tolist()}"
+                )
+        if circles.shape[0] + boxes.shape[0] > MAX_SHAPES:
+            raise InvalidInputError(f"{circles.shape[0] + boxes.shape[0]} obstacles, above the limit of {MAX_SHAPES}")
         object.__setattr__(self, "circles", _frozen(circles, 3))
         object.__setattr__(self, "boxes", _frozen(boxes, 5))
 
@@ -93,6 +120,10 @@ class Obstacles:
             raise InvalidInputError(
                 f"{what}: not valid JSON ({err.msg} at line {err.lineno} col {err.colno})"
             ) from None
+        except ValueError as err:  # an integer of thousands of digits
+            raise InvalidInputError(f"{what}: not valid JSON ({err})") from None
+        except RecursionError:
+            raise InvalidInputError(f"{what}: JSON nested too deeply (a list of [x, y, r] lists is expected)") from None
         if not isinstance(data, list):
             raise InvalidInputError(f"{what}: expected a JSON list of circles, got {type(data).__name__}")
         rows: list[list[float]] = []
@@ -103,17 +134,25 @@ class Obstacles:
                 or len(values) != 3
                 or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in values)
             ):
-                raise InvalidInputError(f"{what}: circle {i} must be [x, y, r] or {{x, y, r}} numbers, got {item!r}")
-            rows.append([float(v) for v in values])
+                raise InvalidInputError(
+                    f"{what}: circle {i} must be [x, y, r] or {{x, y, r}} numbers, got {_excerpt(item)}"
+                )
+            # Integers beyond float range are as out of range as any other huge value.
+            rows.append([_as_float(v) for v in values])
         return cls.from_circles(rows, what)
 
     @classmethod
     def from_json_file(cls, path: str | Path) -> Obstacles:
         """:meth:`from_json` on the text of a file."""
+        file = Path(path)
         try:
-            text = Path(path).read_text(encoding="utf-8")
+            if not file.is_file() or file.stat().st_size > _MAX_JSON_BYTES:
+                raise InvalidInputError(f"{path}: not a regular file of at most {_MAX_JSON_BYTES} bytes")
+            text = file.read_text(encoding="utf-8")
         except OSError as err:
             raise InvalidInputError(f"{path}: cannot read ({err.strerror})") from None
+        except UnicodeDecodeError as err:
+            raise InvalidInputError(f"{path}: not UTF-8 text ({err.reason} at byte {err.start})") from None
         return cls.from_json(text, str(path))
 
     @classmethod

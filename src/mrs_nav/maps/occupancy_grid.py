@@ -147,12 +147,13 @@ class OccupancyGrid:
         """
         if not (math.isfinite(radius) and radius >= 0.0):
             raise InvalidInputError(f"inflation radius must be finite and >= 0, got {radius}")
-        reach = math.floor(radius / self.resolution + 1e-9)
-        if reach == 0:
+        occupied = self.occupied_mask
+        if radius < self.resolution - 1e-9 or not occupied.any():
             return OccupancyGrid(self.values.copy(), self.resolution, self.origin)
-        offsets = np.arange(-reach, reach + 1)
-        kernel = np.hypot(offsets[:, None], offsets[None, :]) * self.resolution <= radius + 1e-9
-        grown = ndimage.binary_dilation(self.occupied_mask, structure=kernel)
+        # The exact Euclidean distance transform gives the same disk as a dilation by that kernel, in time
+        # independent of the radius (a dilation by a 10 m disk at 5 cm took 20 s on a small map).
+        distance = ndimage.distance_transform_edt(~occupied)
+        grown = distance * self.resolution <= radius + 1e-9
         values = self.values.copy()
         values[grown] = OCCUPIED
         return OccupancyGrid(values, self.resolution, self.origin)

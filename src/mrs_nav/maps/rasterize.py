@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from mrs_nav.errors import InvalidInputError, MrsNavError
+from mrs_nav.limits import MAX_GRID_CELLS, check_grid_cells
 from mrs_nav.maps.occupancy_grid import FREE, OCCUPIED, OccupancyGrid
 from mrs_nav.maps.world import World, load_world
 
@@ -29,8 +30,12 @@ DEFAULT_RESOLUTION = 0.05
 _TOUCH = 1e-9
 
 
-def rasterize_world(world: World, resolution: float = DEFAULT_RESOLUTION, margin: float = 0.0) -> OccupancyGrid:
-    """Rasterise ``world`` at ``resolution`` metres per cell over its obstacles' bounds grown by ``margin``."""
+def raster_frame(world: World, resolution: float, margin: float = 0.0) -> tuple[float, float, int, int]:
+    """The grid :func:`rasterize_world` would make: origin ``(x0, y0)`` and ``(width, height)`` in cells.
+
+    Raises :class:`InvalidInputError` naming the world when that grid exceeds
+    :data:`~mrs_nav.limits.MAX_GRID_CELLS`, before anything is allocated.
+    """
     if not (math.isfinite(resolution) and resolution > 0.0):
         raise InvalidInputError(f"resolution must be positive and finite, got {resolution}")
     if not (math.isfinite(margin) and margin >= 0.0):
@@ -39,8 +44,16 @@ def rasterize_world(world: World, resolution: float = DEFAULT_RESOLUTION, margin
     # Snap outwards to the resolution; the small tolerance keeps +-2.1 m from growing by a spurious cell.
     x0 = math.floor(xmin / resolution + 1e-6) * resolution
     y0 = math.floor(ymin / resolution + 1e-6) * resolution
-    width = max(1, math.ceil((xmax - x0) / resolution - 1e-6))
-    height = max(1, math.ceil((ymax - y0) / resolution - 1e-6))
+    # Sizes as floats first: a tiny resolution over a large world would overflow math.ceil or ask for terabytes.
+    columns, rows = (xmax - x0) / resolution - 1e-6, (ymax - y0) / resolution - 1e-6
+    if not columns * rows <= MAX_GRID_CELLS:
+        check_grid_cells(math.ceil(min(columns, 1e18)), math.ceil(min(rows, 1e18)), world.source or world.name)
+    return x0, y0, max(1, math.ceil(columns)), max(1, math.ceil(rows))
+
+
+def rasterize_world(world: World, resolution: float = DEFAULT_RESOLUTION, margin: float = 0.0) -> OccupancyGrid:
+    """Rasterise ``world`` at ``resolution`` metres per cell over its obstacles' bounds grown by ``margin``."""
+    x0, y0, width, height = raster_frame(world, resolution, margin)
     xs = x0 + (np.arange(width) + 0.5) * resolution
     ys = y0 + (np.arange(height) + 0.5) * resolution
     cx, cy = np.meshgrid(xs, ys)  # (height, width): rows are y

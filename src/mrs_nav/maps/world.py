@@ -11,6 +11,7 @@ the file and the element, rather than silently simulating a different world.
 from __future__ import annotations
 
 import math
+import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,6 +20,8 @@ import numpy as np
 
 from mrs_nav.errors import WorldFileError
 from mrs_nav.geometry import FloatArray
+from mrs_nav.limits import MAX_COORDINATE_M, MAX_SHAPES, MAX_SIZE_M
+from mrs_nav.robot import BURGER_HEIGHT
 
 # Includes that carry no obstacle: the ground is part of every simulation and light does not collide.
 _HARMLESS_INCLUDES = frozenset({"model://ground_plane", "model://sun"})
@@ -41,6 +44,8 @@ _IGNORED_WORLD_CHILDREN = frozenset(
     }
 )
 _TILT_TOLERANCE = 1e-6
+# An SDF double as Gazebo's parser reads it; Python's float() would also take "0_2", "nan", "infinity", "١".
+_SDF_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 
 
 @dataclass(frozen=True)
@@ -132,10 +137,9 @@ class _Reader:
 
     def floats(self, text: str | None, count: int, element: str) -> list[float]:
         parts = (text or "").split()
-        try:
-            values = [float(p) for p in parts]
-        except ValueError:
-            raise self.fail(element, f"expected {count} numbers, got {text!r}") from None
+        if not all(_SDF_NUMBER.fullmatch(p) for p in parts):
+            raise self.fail(element, f"expected {count} numbers, got {text!r}")
+        values = [float(p) for p in parts]
         if len(values) != count or not all(math.isfinite(v) for v in values):
             raise self.fail(element, f"expected {count} finite numbers, got {text!r}")
         return values
@@ -152,9 +156,37 @@ class _Reader:
         return _Pose3(x, y, z, yaw)
 
     def positive(self, values: list[float], element: str) -> list[float]:
-        if any(v <= 0.0 for v in values):
-            raise self.fail(element, f"sizes must be positive, got {values}")
+        if any(v <= 0.0 or v > MAX_SIZE_M for v in values):
+            raise self.fail(element, f"sizes must be positive and at most {MAX_SIZE_M:g} m, got {values}")
         return values
+
+    def placed(self, shape: Box | Cylinder, pose: _Pose3, height: float, path: str) -> Box | Cylinder:
+        """``shape`` when it lies within the stated extent and stands in the robot's way (ground to its top)."""
+        if max(abs(pose.x), abs(pose.y), abs(pose.z)) > MAX_COORDINATE_M:
+            raise self.fail(
+                f"{path}/pose",
+                f"position ({pose.x:g}, {pose.y:g}, {pose.z:g}) is more than {MAX_COORDINATE_M:g} m from the origin",
+            )
+        bottom, top = pose.z - height / 2.0, pose.z + height / 2.0
+        if bottom >= BURGER_HEIGHT or top <= 0.0:
+            raise self.fail(
+                path,
+                f"spans z = {bottom:g} .. {top:g} m, which misses the robot (0 .. {BURGER_HEIGHT} m): the simulator "
+                "only models obstacles that stand in the robot's way; remove it or move it down to the ground",
+            )
+        return shape
+
+    def plane(self, shape: ET.Element, gpath: str) -> None:
+        """Accept a ground plane (normal straight up, SDF's default); refuse a tilted or vertical one.
+
+        Any other plane would be a wall or a ramp that the simulator and the maps would silently lack.
+        """
+        normal = shape.findtext("normal")
+        if normal is None:
+            return
+        nx, ny, nz = self.floats(normal, 3, f"{gpath}/normal")
+        if nz <= 0.0 or math.hypot(nx, ny) > _TILT_TOLERANCE * nz:
+            raise self.fail(f"{gpath}/normal", f"only a ground plane (normal 0 0 1) is supported, got {normal!r}")
 
     def collision(self, node: ET.Element, pose: _Pose3, path: str) -> Box | Cylinder | None:
         geometry = node.find("geometry")
@@ -167,12 +199,13 @@ class _Reader:
         gpath = f"{path}/geometry/{shape.tag}"
         if shape.tag == "box":
             sx, sy, sz = self.positive(self.floats(shape.findtext("size"), 3, f"{gpath}/size"), gpath)
-            return Box(path, pose.x, pose.y, pose.z, pose.yaw, sx, sy, sz)
+            return self.placed(Box(path, pose.x, pose.y, pose.z, pose.yaw, sx, sy, sz), pose, sz, path)
         if shape.tag == "cylinder":
             (radius,) = self.positive(self.floats(shape.findtext("radius"), 1, f"{gpath}/radius"), gpath)
             (length,) = self.positive(self.floats(shape.findtext("length"), 1, f"{gpath}/length"), gpath)
-            return Cylinder(path, pose.x, pose.y, pose.z, radius, length)
+            return self.placed(Cylinder(path, pose.x, pose.y, pose.z, radius, length), pose, length, path)
         if shape.tag == "plane":
+            self.plane(shape, gpath)
             return None  # a ground plane: every simulation has one already
         raise self.fail(gpath, "unsupported geometry (only box and cylinder are simulated)")
 
@@ -194,6 +227,8 @@ class _Reader:
                     boxes.append(shape)
                 elif isinstance(shape, Cylinder):
                     cylinders.append(shape)
+                if len(boxes) + len(cylinders) > MAX_SHAPES:
+                    raise self.fail(cpath, f"more than {MAX_SHAPES} boxes and cylinders in one world")
 
     def world(self, root: ET.Element) -> World:
         if root.tag != "sdf":
@@ -220,7 +255,7 @@ def parse_world(text: str, where: str = "<string>") -> World:
     """Parse SDF text; ``where`` names the source in errors."""
     try:
         root = ET.fromstring(text)
-    except ET.ParseError as err:
+    except (ET.ParseError, RecursionError) as err:
         raise WorldFileError(f"{where}: malformed XML: {err}") from err
     return _Reader(where).world(root)
 

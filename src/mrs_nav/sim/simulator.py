@@ -20,6 +20,7 @@ import numpy as np
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D, wrap_angle
+from mrs_nav.limits import MAX_COORDINATE_M, MAX_SHAPES
 from mrs_nav.maps.world import World
 from mrs_nav.sim.commands import CommandLimiter, Twist2D
 from mrs_nav.sim.laser import Laser, LaserParams, Scan
@@ -83,6 +84,17 @@ class Simulator:
         self.config = config or SimulatorConfig()
         self.world = world
         self.start = start or Pose2D(0.0, 0.0, 0.0)
+        # World files are held to these on loading; a World built in code is held to them here. Every scan casts
+        # its rays against every shape, so their number is what bounds the cost of a step.
+        shapes = len(world.boxes) + len(world.cylinders)
+        if shapes > MAX_SHAPES:
+            raise InvalidInputError(
+                f"world {world.name}: {shapes} boxes and cylinders, above the limit of {MAX_SHAPES}"
+            )
+        if max(abs(self.start.x), abs(self.start.y)) > MAX_COORDINATE_M:
+            raise InvalidInputError(
+                f"start ({self.start.x:g}, {self.start.y:g}) is more than {MAX_COORDINATE_M:g} m out"
+            )
         laser_seed, odom_seed = np.random.SeedSequence(self.config.seed).spawn(2)
         self._physics = Physics(world, self.config.robot, self.start)
         self._laser = Laser(self._physics.obstacle_space, self.config.laser, np.random.default_rng(laser_seed))

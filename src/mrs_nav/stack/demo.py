@@ -20,6 +20,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from array import array
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -33,6 +34,7 @@ from mrs_nav.control.path_following import cross_track_distance
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
+from mrs_nav.maps.rasterize import raster_frame
 from mrs_nav.maps.world import World
 from mrs_nav.navigation.navigator import GoalState, NavEvent, Navigator, NavigatorConfig, rrt_planner
 from mrs_nav.sim import Scan, Simulator, SimulatorConfig
@@ -163,6 +165,9 @@ class Demo:
         recorder: Recorder | None = None,
         sim_config: SimulatorConfig | None = None,
     ) -> None:
+        # The map is scored against the world rasterised at SLAM's resolution: refuse a world too large for that
+        # now, not after the whole run.
+        raster_frame(world, config.slam.delta)
         self.world = world
         self.config = config
         self.recorder = recorder
@@ -172,9 +177,11 @@ class Demo:
         self.slam = Slam(config.slam, Pose2D(laser.mount_x, laser.mount_y, 0.0))
         planner = rrt_planner(config.planner, config.plan_time_budget_s, config.plan_iterations)
         self.navigator = Navigator(planner, config.navigator, seed=config.seed)
-        self._truth: list[tuple[float, float, float]] = []
-        self._estimate: list[tuple[float, float, float]] = []
-        self._cross: list[float] = []
+        # Flat float buffers (x, y, yaw per control tick), not lists of tuples: a third of the memory in long runs.
+        self._truth = array("d")
+        self._estimate = array("d")
+        self._cross = array("d")
+        self._travelled = 0.0  # m, summed as the robot moves (re-summing the whole track per goal grew with the run)
         self._paths: list[FloatArray] = []
         self._last_map = -math.inf
 
@@ -190,7 +197,7 @@ class Demo:
         self._idle(1.0)
         outcomes = []
         for goal in self.config.goals:
-            outcomes.append(self._go_to(goal))
+            outcomes.append(self.go_to(goal))
             if progress:
                 progress(self.sim.time)
         grid = slam_grid(self.slam)
@@ -210,10 +217,11 @@ class Demo:
             cross_track_m=np.array(self._cross),
         )
 
-    def _go_to(self, goal: tuple[float, float]) -> GoalOutcome:
+    def go_to(self, goal: tuple[float, float]) -> GoalOutcome:
+        """Drive to ``goal`` until reached, failed or ``goal_timeout_s`` (sim), then stand for a second."""
         nav, sim, cfg = self.navigator, self.sim, self.config
         t0 = sim.time
-        travelled0 = self._travelled()
+        travelled0 = self._travelled
         steps_per_control = max(1, round(sim.config.physics_rate / cfg.control_rate_hz))
         self._publish_map(force=True)
         if self.recorder:
@@ -250,7 +258,7 @@ class Demo:
             time_s=sim.time - t0,
             distance_m=math.hypot(goal[0] - truth.x, goal[1] - truth.y),
             path_length_m=path_length,
-            travelled_m=self._travelled() - travelled0,
+            travelled_m=self._travelled - travelled0,
             events=tuple(events),
         )
 
@@ -293,17 +301,13 @@ class Demo:
 
     def _track(self, estimate: Pose2D) -> None:
         truth = self.sim.ground_truth()
-        self._truth.append((truth.x, truth.y, truth.yaw))
-        self._estimate.append((estimate.x, estimate.y, estimate.yaw))
+        if self._truth:
+            self._travelled += math.hypot(truth.x - self._truth[-3], truth.y - self._truth[-2])
+        self._truth.extend((truth.x, truth.y, truth.yaw))
+        self._estimate.extend((estimate.x, estimate.y, estimate.yaw))
         path = self.navigator.path
         if path is not None and self.navigator.state is GoalState.ACTIVE:
             self._cross.append(cross_track_distance([truth.x, truth.y], path))
-
-    def _travelled(self) -> float:
-        if len(self._truth) < 2:
-            return 0.0
-        xy = np.array(self._truth)[:, :2]
-        return float(np.sum(np.hypot(*np.diff(xy, axis=0).T)))
 
 
 def save_figure(result: DemoResult, path: Path, title: str = "") -> Path:

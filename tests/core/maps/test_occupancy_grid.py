@@ -74,3 +74,12 @@ def test_bad_grids_are_rejected() -> None:
         OccupancyGrid(np.full((2, 2), -5, np.int8), 0.1)
     with pytest.raises(InvalidInputError, match="radius"):
         OccupancyGrid(np.zeros((2, 2), np.int8), 0.1).inflate(-1.0)
+
+
+def test_inflating_by_a_large_radius_marks_the_disk_around_each_occupied_cell() -> None:
+    values = np.zeros((41, 41), dtype=np.int8)
+    values[20, 20] = 100
+    grown = OccupancyGrid(values, 0.1, (0.0, 0.0, 0.0)).inflate(1.0)
+    rows, cols = np.mgrid[0:41, 0:41]
+    expected = np.hypot(rows - 20, cols - 20) * 0.1 <= 1.0 + 1e-9
+    assert np.array_equal(grown.values == 100, expected)

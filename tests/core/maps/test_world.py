@@ -85,3 +85,46 @@ def test_malformed_xml_and_missing_file_name_the_file(tmp_path: Path) -> None:
         parse_world("<sdf><world>", "broken.world")
     with pytest.raises(WorldFileError, match=r"nothing\.world: cannot read"):
         load_world(tmp_path / "nothing.world")
+
+
+def _box(pose: str = "0 0 0.25 0 0 0", size: str = "1 1 0.5") -> str:
+    return _sdf(
+        f'<model name="b"><static>true</static><pose>{pose}</pose><link name="l">'
+        f'<collision name="c"><geometry><box><size>{size}</size></box></geometry></collision></link></model>'
+    )
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        # a vertical plane is a wall the simulator would not have
+        (
+            _sdf(
+                '<model name="p"><static>true</static><link name="l"><collision name="c"><geometry><plane>'
+                "<normal>1 0 0</normal></plane></geometry></collision></link></model>"
+            ),
+            r"<model\[p\]/link\[l\]/collision\[c\]/geometry/plane/normal>: only a ground plane",
+        ),
+        # a box floating far above the robot is no obstacle; one sunk below the ground neither
+        (_box(pose="0 0 10 0 0 0"), "spans z = 9.75 .. 10.25 m, which misses the robot"),
+        (_box(pose="0 0 -1 0 0 0"), "which misses the robot"),
+        # Python's float() reads "0_2" as 2; SDF has no such number
+        (_box(size="0_2 1 1"), r"geometry/box/size>: expected 3 numbers, got '0_2 1 1'"),
+        (_box(size="1 1 1e7"), "sizes must be positive and at most 1000 m"),
+        (_box(pose="1e7 0 0.25 0 0 0"), "is more than 1000 m from the origin"),
+    ],
+)
+def test_what_the_simulator_cannot_honour_is_refused_by_name(text: str, message: str) -> None:
+    with pytest.raises(WorldFileError, match=message):
+        parse_world(text, "w.world")
+
+
+def test_more_shapes_than_the_limit_are_refused() -> None:
+    boxes = "".join(
+        f'<collision name="c{i}"><pose>{i % 100} {i // 100} 0.25 0 0 0</pose>'
+        "<geometry><box><size>0.5 0.5 0.5</size></box></geometry></collision>"
+        for i in range(2001)
+    )
+    text = _sdf(f'<model name="many"><static>true</static><link name="l">{boxes}</link></model>')
+    with pytest.raises(WorldFileError, match="more than 2000 boxes and cylinders"):
+        parse_world(text, "w.world")

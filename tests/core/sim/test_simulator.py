@@ -10,7 +10,7 @@ import pytest
 
 from mrs_nav.errors import InvalidInputError, WorldFileError
 from mrs_nav.geometry import Pose2D, wrap_angle
-from mrs_nav.maps.world import World, load_world
+from mrs_nav.maps.world import Box, World, load_world
 from mrs_nav.sim import LaserParams, Simulator, SimulatorConfig
 
 START = Pose2D(-1.5, -1.5, 0.0)
@@ -161,3 +161,11 @@ def test_a_world_with_an_unsupported_element_fails_naming_file_and_element(tmp_p
     bad.write_text('<sdf version="1.6"><world name="w"><model name="m">')
     with pytest.raises(WorldFileError, match=r"bad\.world: malformed XML"):
         load_world(bad)
+
+
+def test_a_world_built_in_code_is_held_to_the_shape_limit() -> None:
+    boxes = tuple(Box(f"b{i}", i % 100, i // 100, 0.25, 0.0, 0.5, 0.5, 0.5) for i in range(2001))
+    with pytest.raises(InvalidInputError, match="2001 boxes and cylinders, above the limit of 2000"):
+        Simulator(World("many", boxes, ()))
+    with pytest.raises(InvalidInputError, match="more than 1000 m out"):
+        Simulator(World("empty", (), ()), start=Pose2D(1e6, 0.0, 0.0))

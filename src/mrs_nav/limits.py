@@ -1,0 +1,42 @@
+"""The stated maxima of what mrs_nav accepts from files and options, checked before any work or allocation.
+
+Each limit is far above what a TurtleBot3-sized robot in a building needs and low enough that the work or
+memory it allows stays within a few seconds and a few hundred megabytes on a small machine. Past a limit the
+input is refused with an :class:`~mrs_nav.errors.InvalidInputError` (or the loader's own domain error) that
+names the input, the field and the limit; nothing is truncated or clamped silently. The README lists them.
+"""
+
+from __future__ import annotations
+
+from mrs_nav.errors import InvalidInputError
+
+#: World geometry: every coordinate within +-this of the origin, metres (a 2 km square site).
+MAX_COORDINATE_M = 1000.0
+#: World geometry: the largest size (box side, cylinder radius or length), metres.
+MAX_SIZE_M = 1000.0
+#: Boxes plus cylinders in one world: the simulator's 360 rays and the contact checks scale with this.
+MAX_SHAPES = 2000
+#: Cells of one occupancy grid (rasterised world, map file, inflated map): 20 million (e.g. 4472 x 4472,
+#: 224 m square at 5 cm); rasterising that peaks near 1.5 GB, so anything larger is refused before allocating.
+MAX_GRID_CELLS = 20_000_000
+#: A map file's image (.pgm) in bytes: 16-bit pixels of the largest grid plus header room.
+MAX_IMAGE_BYTES = 2 * MAX_GRID_CELLS + 4096
+#: Obstacle inflation radius (the robot's radius), metres: larger than any robot this stack drives.
+MAX_ROBOT_RADIUS_M = 2.0
+#: Planner and navigation budgets: wall or sim seconds.
+MAX_BUDGET_S = 3600.0
+#: Iteration and step counts (samples of RRT/RRT*, integration steps of the potential field).
+MAX_ITERATIONS = 10_000_000
+#: Random seeds: numpy's and ODE's seeds are unsigned 32-bit.
+MAX_SEED = 2**32 - 1
+#: Nesting depth of a JSON obstacle list: a list of [x, y, r] lists needs 2.
+MAX_JSON_DEPTH = 2
+
+
+def check_grid_cells(width: int, height: int, what: str) -> None:
+    """Refuse a ``width`` x ``height`` grid above :data:`MAX_GRID_CELLS` before anything is allocated."""
+    if width * height > MAX_GRID_CELLS:
+        raise InvalidInputError(
+            f"{what}: a {width} x {height} grid ({width * height:.3g} cells) exceeds the limit of "
+            f"{MAX_GRID_CELLS:.3g} cells; use a coarser resolution or a smaller area"
+        )
