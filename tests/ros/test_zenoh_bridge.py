@@ -143,6 +143,7 @@ def test_a_late_joiner_gets_the_latched_map(plain: Bridge, rospy_node: Any, tmp_
     grid.data = [0, 100, -1] * 400
     pub = rospy_node.Publisher("/map", OccupancyGrid, queue_size=1, latch=True)
     try:
+        published = time.time()
         pub.publish(grid)
         session = open_client_session([plain.endpoint])
         wait_for(
@@ -156,10 +157,14 @@ def test_a_late_joiner_gets_the_latched_map(plain: Bridge, rospy_node: Any, tmp_
         result = mrs_nav(
             "monitor", "--connect", plain.endpoint, "--once", "--duration", "1.5", "--json", "--snapshot", str(snapshot)
         )
+        ended = time.time()
     finally:
         pub.unregister()
     assert result.returncode == 0, result.stderr
     summary = json.loads(result.stdout)
+    # The cached map comes with its true age: at least the 1.5 s the monitor watched, at most since publication.
+    assert 1.5 <= summary["topics"]["/map"]["age_s"] <= ended - published
+    assert summary["topics"]["/map"]["stale"] is False  # its publisher lives
     assert summary["map"]["width"] == 40
     assert summary["map"]["height"] == 30
     assert summary["topics"]["/map"]["count"] == 1
