@@ -139,20 +139,20 @@ class OccupancyGrid:
         return self.lookup(self.occupied_mask, points)
 
     def inflate(self, radius: float = BURGER_RADIUS) -> OccupancyGrid:
-        """A copy where every cell whose centre is within ``radius`` metres of an occupied cell's centre is occupied.
+        """A copy where every cell from which a disc of ``radius`` metres could overlap an occupied cell is occupied.
 
-        The kernel is the disk of cells ``{(i, j): res * hypot(i, j) <= radius}``, so a robot of that radius
-        centred in a free cell of the result does not overlap an occupied cell's centre. Unknown cells stay
-        unknown (still not free); a radius of 0 returns an identical grid.
+        The test is exact for the cells' squares: a disc centred anywhere in cell ``a`` overlaps the square of
+        cell ``b`` at offset ``(i, j)`` cells exactly when the two squares are closer than ``radius``, and the
+        squares are ``res * hypot(max(|i| - 1, 0), max(|j| - 1, 0))`` apart. So a robot of that radius centred
+        *anywhere* in a free cell of the result (not only at its centre) stays clear of every occupied cell's
+        square; touching counts as overlap. Unknown cells stay unknown (still not free); a radius of 0 returns an
+        identical grid.
         """
         if not (math.isfinite(radius) and radius >= 0.0):
             raise InvalidInputError(f"inflation radius must be finite and >= 0, got {radius}")
-        reach = math.floor(radius / self.resolution + 1e-9)
-        if reach == 0:
+        if radius == 0.0:
             return OccupancyGrid(self.values.copy(), self.resolution, self.origin)
-        offsets = np.arange(-reach, reach + 1)
-        kernel = np.hypot(offsets[:, None], offsets[None, :]) * self.resolution <= radius + 1e-9
-        grown = ndimage.binary_dilation(self.occupied_mask, structure=kernel)
+        grown = ndimage.binary_dilation(self.occupied_mask, structure=inflation_kernel(radius, self.resolution))
         values = self.values.copy()
         values[grown] = OCCUPIED
         return OccupancyGrid(values, self.resolution, self.origin)
@@ -171,6 +171,15 @@ class OccupancyGrid:
         """
         eroded: BoolArray = ndimage.binary_erosion(self.free_mask, structure=np.ones((3, 3), bool), border_value=0)
         return eroded
+
+
+def inflation_kernel(radius: float, resolution: float) -> BoolArray:
+    """The offsets ``(i, j)`` (cells, centred) whose squares lie closer than ``radius`` (m) to the centre square."""
+    reach = math.floor(radius / resolution + 1e-9) + 1
+    offsets = np.maximum(np.abs(np.arange(-reach, reach + 1)) - 1, 0)
+    gap: npt.NDArray[np.float64] = np.hypot(offsets[:, None], offsets[None, :]) * resolution
+    kernel: BoolArray = gap < radius + 1e-9
+    return kernel
 
 
 def planning_grid(grid: OccupancyGrid, inflation_m: float = BURGER_RADIUS, allow_unknown: bool = True) -> OccupancyGrid:
