@@ -14,6 +14,9 @@ speed. With ``~lockstep`` true the loop never runs more than ``~lockstep_period`
 ``cmd_vel`` it received, so a controller ticking on sim time keeps up at any rate (see
 :mod:`mrs_nav.sim.lockstep`: free running before the first command and after ``~lockstep_timeout`` wall seconds
 of silence). A bad ``cmd_vel`` (non-finite numbers) is logged and ignored; the watchdog then stops the robot.
+
+``~set_pose`` (geometry_msgs/Pose2D, world frame) teleports the robot, stopped, without its odometry noticing:
+the kidnapped-robot test of a localisation. A pose inside an obstacle is logged and ignored.
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ from typing import Any
 import rospkg
 import rospy
 import tf2_ros
+from geometry_msgs.msg import Pose2D as Pose2DMsg
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry as OdometryMsg
 from rosgraph_msgs.msg import Clock
@@ -183,6 +187,7 @@ class SimulatorNode:
         self._joints_pub = rospy.Publisher("joint_states", JointState, queue_size=10)
         self._tf = tf2_ros.TransformBroadcaster() if config.publish_tf else None
         self._cmd_sub = rospy.Subscriber("cmd_vel", Twist, self._on_cmd_vel, queue_size=10, tcp_nodelay=True)
+        self._set_pose_sub = rospy.Subscriber("~set_pose", Pose2DMsg, self._on_set_pose, queue_size=1)
         self._set_own_time = _own_the_clock()
         self._gate = LockstepGate(config.lockstep) if config.lockstep is not None else None
 
@@ -197,6 +202,16 @@ class SimulatorNode:
             now = self.sim.time
         if self._gate is not None:
             self._gate.on_command(now)
+
+    def _on_set_pose(self, msg: Pose2DMsg) -> None:
+        try:
+            pose = Pose2D(msg.x, msg.y, msg.theta)
+            with self._lock:
+                self.sim.teleport(pose)
+        except InvalidInputError as err:
+            rospy.logwarn_throttle(5.0, f"simulator: ignoring set_pose: {err}")
+            return
+        rospy.loginfo(f"simulator: robot teleported to ({pose.x:.2f}, {pose.y:.2f}, {pose.yaw:.2f})")
 
     def _publish_state(self) -> None:
         cfg = self.config
