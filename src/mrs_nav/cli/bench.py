@@ -22,6 +22,7 @@ BENCHMARKS = {
     "navigation": "navigation",
     "replay": "replay",
     "bridge": "bridge",
+    "localisation": "localisation",
 }
 
 
