@@ -40,7 +40,7 @@ def _go(rospy: Any, goals: tuple[tuple[float, float], ...], truth: TruthTrack, t
             pub.publish(goal)
 
             def finished(done: int = done) -> bool:
-                return any(m.startswith(("reached:", "failed:")) for m in status.messages[done:])
+                return any(m.startswith(("reached:", "failed:", "refused:")) for m in status.messages[done:])
 
             wait_for(finished, timeout, f"goal ({x}, {y})")
             assert any(m.startswith("reached:") for m in status.messages[done:]), status.messages[done:]
@@ -56,9 +56,16 @@ def test_slam_then_saved_map_then_goals_in_other_rooms(ros_master: RosMaster, ro
     saved = tmp_path / "office"
     truth = TruthTrack(rospy, "office.world")
     try:
+        from nav_msgs.msg import OccupancyGrid
+
+        maps: list[Any] = []
+        map_sub = rospy.Subscriber("/map", OccupancyGrid, maps.append, queue_size=1)
         with ros_master.launch("rrt_navigation.launch", *MAX_RATE, *OFFICE) as proc:
-            wait_for(lambda: proc.poll() is not None or rospy.get_time() > 3.0, 60.0, "the simulation")
+            wait_for(lambda: proc.poll() is not None or maps, 90.0, "the first SLAM map")
             assert proc.poll() is None, "roslaunch exited"
+            map_sub.unregister()
+            first_map = rospy.get_time()
+            wait_for(lambda: rospy.get_time() > first_map + 3.0, 30.0, "the navigation node to have the map too")
             _go(rospy, MAPPING_GOALS, truth, 300.0)
             result = subprocess.run(
                 ["rosrun", "mrs_nav", "map_saver", "-f", str(saved)],
