@@ -106,7 +106,6 @@ class ParticleFilter:
             raise InvalidInputError("localisation needs a map with at least one free cell")
         self._fields: dict[float, LikelihoodField] = {}
         self._last_odom: Pose2D | None = None
-        self._force_update = True
         self._updates = 0
         self._w_slow = 0.0
         self._w_fast = 0.0
@@ -143,6 +142,8 @@ class ParticleFilter:
         self.particles = particles
         self._log_weights = np.zeros(len(particles))
         self._estimate = self._compute_estimate()
+        # The new cloud describes the robot as it is now: odometry before the next scan must not move it.
+        self._last_odom = None
         self._force_update = True
         self._w_slow = self._w_fast = 0.0
 
