@@ -16,6 +16,9 @@ speed. With ``~lockstep`` true the loop never runs more than ``~lockstep_period`
 of silence). A bad ``cmd_vel`` (non-finite numbers) is logged and ignored; the watchdog then stops the robot.
 ``~add_box`` (visualization_msgs/Marker of type CUBE: pose in the world frame, scale = full sizes in m, ``ns``
 its name) puts a box into the world at run time, e.g. across a corridor after the map was made.
+
+``~set_pose`` (geometry_msgs/Pose2D, world frame) teleports the robot, stopped, without its odometry noticing:
+the kidnapped-robot test of a localisation. A pose inside an obstacle is logged and ignored.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ from typing import Any
 import rospkg
 import rospy
 import tf2_ros
+from geometry_msgs.msg import Pose2D as Pose2DMsg
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry as OdometryMsg
 from rosgraph_msgs.msg import Clock
@@ -188,6 +192,7 @@ class SimulatorNode:
         self._tf = tf2_ros.TransformBroadcaster() if config.publish_tf else None
         self._cmd_sub = rospy.Subscriber("cmd_vel", Twist, self._on_cmd_vel, queue_size=10, tcp_nodelay=True)
         self._box_sub = rospy.Subscriber("~add_box", Marker, self._on_add_box, queue_size=10)
+        self._set_pose_sub = rospy.Subscriber("~set_pose", Pose2DMsg, self._on_set_pose, queue_size=1)
         self._set_own_time = _own_the_clock()
         self._gate = LockstepGate(config.lockstep) if config.lockstep is not None else None
 
@@ -226,6 +231,16 @@ class SimulatorNode:
             rospy.logwarn_throttle(5.0, f"simulator: ~add_box: {err}")
             return
         rospy.loginfo(f"simulator: added box {box.name!r} at ({box.x:.2f}, {box.y:.2f})")
+
+    def _on_set_pose(self, msg: Pose2DMsg) -> None:
+        try:
+            pose = Pose2D(msg.x, msg.y, msg.theta)
+            with self._lock:
+                self.sim.teleport(pose)
+        except InvalidInputError as err:
+            rospy.logwarn_throttle(5.0, f"simulator: ignoring set_pose: {err}")
+            return
+        rospy.loginfo(f"simulator: robot teleported to ({pose.x:.2f}, {pose.y:.2f}, {pose.yaw:.2f})")
 
     def _publish_state(self) -> None:
         cfg = self.config

@@ -214,6 +214,38 @@ class Physics:
         yaw = self.pose().yaw
         return (vx * math.cos(yaw) + vy * math.sin(yaw), self.chassis.getAngularVel()[2])
 
+    def move_robot(self, pose: Pose2D) -> None:
+        """Teleport the robot, at rest, so that ``base_footprint`` is at ``pose`` (the kidnapped-robot test).
+
+        Every body is moved by the same planar rigid motion, so the wheels keep their hinge angles and the wheel
+        odometry sees no motion at all. A pose overlapping an obstacle raises InvalidInputError and leaves the
+        robot where it was.
+        """
+        before = self.pose()
+        motion = pose.compose(before.inverse())
+
+        def apply(m: Pose2D) -> None:
+            turn = _rotation_z(m.yaw)
+            c, s = math.cos(m.yaw), math.sin(m.yaw)
+            for body in (self.chassis, *self._wheel_bodies):
+                x, y, z = body.getPosition()
+                body.setPosition((m.x + c * x - s * y, m.y + s * x + c * y, z))
+                r = body.getRotation()
+                body.setRotation(
+                    tuple(sum(turn[3 * i + k] * r[3 * k + j] for k in range(3)) for i in range(3) for j in range(3))
+                )
+                body.setLinearVel((0.0, 0.0, 0.0))
+                body.setAngularVel((0.0, 0.0, 0.0))
+
+        apply(motion)
+        touching = self._touching_obstacles()
+        if touching:
+            apply(motion.inverse())
+            raise InvalidInputError(
+                f"pose ({pose.x:.3f}, {pose.y:.3f}) of a robot of radius {self.params.footprint_radius} m overlaps "
+                f"{', '.join(sorted(touching))}"
+            )
+
     def height(self) -> float:
         """Height (m) of the chassis centre: stays near its start unless the robot climbs or sinks."""
         return float(self.chassis.getPosition()[2])

@@ -178,6 +178,13 @@ class Simulator:
                 scans.append(scan)
         return scans
 
+    def teleport(self, pose: Pose2D) -> None:
+        """Put the robot, stopped, at ``pose`` (world frame) without its odometry noticing: a kidnapping.
+
+        Raises InvalidInputError if the robot would overlap an obstacle there (it then stays where it was).
+        """
+        self._physics.move_robot(pose)
+
     # -- reading ------------------------------------------------------------------------------------------------
 
     @property
