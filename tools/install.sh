@@ -15,6 +15,7 @@ apt_packages=(
   python3-visualization-msgs python3-tf2-msgs ros-robot-state-publisher
   python3-pyode python3-numpy python3-scipy python3-yaml python3-venv python3-pip
   xvfb xdotool imagemagick
+  openssl  # certificates for the Zenoh bridge's TLS tests and bench
   libsdformat-dev pkg-config
 )
 if [ "${MRS_NAV_RVIZ:-0}" = 1 ]; then apt_packages+=(rviz); fi
