@@ -16,6 +16,7 @@ apt_packages=(
   python3-actionlib python3-actionlib-msgs python3-move-base-msgs
   python3-pyode python3-numpy python3-scipy python3-yaml python3-venv python3-pip
   xvfb xdotool imagemagick
+  openssl  # certificates for the Zenoh bridge's TLS tests and bench
   libsdformat-dev pkg-config
 )
 if [ "${MRS_NAV_RVIZ:-0}" = 1 ]; then apt_packages+=(rviz); fi

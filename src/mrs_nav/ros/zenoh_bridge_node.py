@@ -313,18 +313,19 @@ class ZenohBridgeNode:
             except (zenoh.ZError, MrsNavError) as err:
                 rospy.logwarn_throttle(DROP_LOG_PERIOD, f"zenoh bridge: cannot bridge {out.topic}: {err}")
                 return
-        if not out.md5:
+        publisher = out.publisher
+        if publisher is None or not out.md5:  # retired meanwhile, or no md5 to announce
             return
         try:
-            out.publisher.put(msg._buff, attachment=encode_attachment(out.md5, received))
+            publisher.put(msg._buff, attachment=encode_attachment(out.md5, received))
             out.forwarded += 1
         except zenoh.ZError as err:
             rospy.logwarn_throttle(DROP_LOG_PERIOD, f"zenoh bridge: put on {out.topic} failed: {err}")
 
     def _declare_outbound(self, session: zenoh.Session, out: _Outbound, header: Mapping[str, str]) -> None:
         with self._lock:
-            if out.publisher is not None:
-                return
+            if out.publisher is not None or self._outbound.get(out.topic) is not out:
+                return  # declared already, or retired while this message was on its way: announce nothing
             type_name = header.get("type", out.type)
             md5 = header.get("md5sum", "")
             if header.get("message_definition"):
@@ -426,8 +427,3 @@ class ZenohBridgeNode:
                 "zenoh bridge: dropped remote message %s (%d dropped so far): %s", where, refusals.count, reason
             )
         return reason
-
-    def stats(self) -> dict[str, tuple[int, int]]:
-        """Per bridged topic: (messages forwarded, messages held back by the rate limit)."""
-        with self._lock:
-            return {t: (o.forwarded, o.limited) for t, o in self._outbound.items()}
