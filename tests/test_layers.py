@@ -22,6 +22,7 @@ RANKS: dict[str, int] = {
     "planning": 2,
     "motion_model": 2,
     "options": 2,
+    "tables": 2,
     "ros_processes": 2,
     # the algorithms, each on the layers below it
     "maps": 3,

@@ -63,7 +63,7 @@ def test_catkin_make_builds_a_workspace_that_finds_the_package(tmp_path: Path) -
     assert result.returncode == 0, result.stdout + result.stderr
     found, module = result.stdout.split()[-2:]
     assert Path(found).resolve() == REPO
-    assert Path(module).resolve() == REPO / "src" / "mrs_nav" / "world.py"
+    assert Path(module).resolve() == REPO / "src" / "mrs_nav" / "maps" / "world.py"
 
 
 def test_a_closed_pipe_is_not_an_error() -> None:

@@ -22,11 +22,11 @@ from typing import Any
 
 import numpy as np
 
-from mrs_nav.bench.results import markdown_table
 from mrs_nav.bridge.session import open_client_session
 from mrs_nav.errors import MrsNavError
 from mrs_nav.resources import CHECKOUT
 from mrs_nav.ros_processes import RosProcessError, free_port, process, roscore
+from mrs_nav.tables import markdown_table
 
 TOPICS = {"/odom": 100.0, "/scan": 5.0, "/map": 1.0}
 TARGET_P50_MS, TARGET_P99_MS = 1.0, 5.0

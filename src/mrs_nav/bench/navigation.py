@@ -30,7 +30,6 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 from tqdm import tqdm
 
-from mrs_nav.bench.results import markdown_table
 from mrs_nav.errors import InvalidInputError, NoPathFoundError
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
@@ -42,6 +41,7 @@ from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.robot import BURGER_RADIUS
 from mrs_nav.ros_processes import RosProcessError, process, read_clock, roscore, roslaunch_command
 from mrs_nav.stack.demo import Demo, DemoConfig
+from mrs_nav.tables import markdown_table
 
 ROS_TARGET_RTF = 5.0  # the whole ROS stack at max rate, sim s per wall s (issue 6)
 

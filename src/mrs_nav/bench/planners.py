@@ -26,13 +26,13 @@ from typing import Any
 
 import numpy as np
 
-from mrs_nav.bench.results import markdown_table
 from mrs_nav.geometry import Pose2D
 from mrs_nav.maps.occupancy_grid import OCCUPIED, OccupancyGrid
 from mrs_nav.maps.rasterize import rasterize_world
 from mrs_nav.maps.world import load_world
 from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.robot import BURGER_RADIUS
+from mrs_nav.tables import markdown_table
 from mrs_nav.trees.rrt import RRTConfig, grow_rrt
 from mrs_nav.trees.rrt_star import RRTStarConfig, grow_rrt_star
 from mrs_nav.trees.scenarios import COURSE_GOAL, COURSE_START, course_grid

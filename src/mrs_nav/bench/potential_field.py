@@ -15,11 +15,11 @@ import sys
 import numpy as np
 from tqdm import tqdm
 
-from mrs_nav.bench.results import markdown_table
 from mrs_nav.fields.randomized_potential_field import EscapeSettings, plan_potential_field
 from mrs_nav.fields.scenarios import Scenario, symmetric_trap, two_cylinder_trap
 from mrs_nav.fields.shortest_path import shortest_path
 from mrs_nav.maps.obstacles import Obstacles
+from mrs_nav.tables import markdown_table
 
 HEADER = [
     "case",

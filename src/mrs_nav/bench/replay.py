@@ -19,12 +19,12 @@ from typing import Any
 from tqdm import tqdm
 
 from mrs_nav.bag.from_carmen import carmen_to_bag
-from mrs_nav.bench.results import markdown_table
 from mrs_nav.bench.slam import DEFAULT_LOG, INTEL_CONFIG
 from mrs_nav.motion_model import DEFAULT_ALPHAS, OdometryNoise
 from mrs_nav.replay.slam_replay import SlamReplay, replay_slam
 from mrs_nav.resources import CHECKOUT
 from mrs_nav.slam.config import SlamConfig
+from mrs_nav.tables import markdown_table
 
 DEFAULT_BAGS = CHECKOUT / "tests" / "data" / "bags"
 REALTIME_TARGET = 15.0  # DESIGN.md: the Intel log processed >= 15x faster than real time

@@ -20,7 +20,6 @@ import tempfile
 import time
 from pathlib import Path
 
-from mrs_nav.bench.results import markdown_table
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.maps.world import load_world
@@ -29,6 +28,7 @@ from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.ros_processes import RosProcessError, process, read_clock, roscore, roslaunch_command
 from mrs_nav.sim import Simulator, SimulatorConfig
 from mrs_nav.sim.scripted_drive import OFFICE_CORRIDOR_LOOP, WaypointDriver
+from mrs_nav.tables import markdown_table
 
 OFFICE = WORLDS_DIR / "office.world"
 OFFICE_START = Pose2D(-5.0, -5.0, 0.0)

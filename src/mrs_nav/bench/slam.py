@@ -16,7 +16,6 @@ from pathlib import Path
 import numpy as np
 
 from mrs_nav.bag.from_carmen import carmen_to_bag
-from mrs_nav.bench.results import markdown_table
 from mrs_nav.maps.world import load_world
 from mrs_nav.motion_model import DEFAULT_ALPHAS, OdometryNoise
 from mrs_nav.replay.slam_replay import replay_slam
@@ -25,6 +24,7 @@ from mrs_nav.sim.simulator import SimulatorConfig
 from mrs_nav.slam.config import SlamConfig
 from mrs_nav.slam.metrics import trajectory_errors
 from mrs_nav.slam.sim_drive import OFFICE_START, OFFICE_WAYPOINTS, drive_with_slam
+from mrs_nav.tables import markdown_table
 
 DEFAULT_LOG = CHECKOUT.parent / "shared" / "data" / "intel-corrected.log.gz"
 OFFICE = WORLDS_DIR / "office.world"

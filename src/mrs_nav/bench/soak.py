@@ -16,12 +16,12 @@ import os
 import time
 from dataclasses import dataclass
 
-from mrs_nav.bench.results import markdown_table
 from mrs_nav.geometry import Pose2D
 from mrs_nav.maps.world import load_world
 from mrs_nav.options import number_option, seed_option
 from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.stack.demo import Demo, DemoConfig
+from mrs_nav.tables import markdown_table
 
 CORNERS = ((1.5, 1.5), (-1.5, 1.5), (1.5, -1.5), (-1.5, -1.5))
 START = Pose2D(-1.5, -1.5, 0.0)

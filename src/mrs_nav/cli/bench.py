@@ -21,6 +21,7 @@ BENCHMARKS = {
     "slam": "slam",
     "navigation": "navigation",
     "replay": "replay",
+    "replay-batch": "replay_batch",
     "bridge": "bridge",
     "soak": "soak",
 }

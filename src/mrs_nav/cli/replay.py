@@ -1,43 +1,36 @@
-"""``mrs-nav replay``: run SLAM (and the planner) over a recorded bag offline, compare with what was recorded,
-and hold the metrics to a golden file."""
+"""``mrs-nav replay``: run SLAM (and the planner) over recorded bags offline, compare with what was recorded,
+and hold the metrics to golden files; several bags fan out to worker processes or a Dask cluster."""
 
 from __future__ import annotations
 
 import argparse
+import json
+import os
 import sys
-import tempfile
 from pathlib import Path
 from typing import Any
 
 from tqdm import tqdm
 
-from mrs_nav.bag.salvage import readable_bag
 from mrs_nav.cli.common import check_writable, fail, print_json
+from mrs_nav.errors import InvalidInputError
 from mrs_nav.limits import MAX_ITERATIONS, MAX_SEED
 from mrs_nav.options import count_option, seed_option
-from mrs_nav.replay.golden import dump_json, load_golden, make_golden, regressions
-from mrs_nav.replay.session_replay import PlanOptions, SessionReplay, replay_session, write_session_outputs
-from mrs_nav.replay.slam_replay import write_outputs
-from mrs_nav.slam.config import SlamConfig
+from mrs_nav.replay.batch import (
+    BagJob,
+    aggregate,
+    find_bags,
+    golden_beside,
+    markdown_report,
+    replay_bag,
+    run_jobs,
+)
+from mrs_nav.replay.golden import dump_json, make_golden
+from mrs_nav.replay.session_replay import PlanOptions
 
 
-def register(subparsers: Any) -> None:
-    parser: argparse.ArgumentParser = subparsers.add_parser(
-        "replay",
-        help="replay a bag offline: SLAM, re-planning, comparison with the recording, golden metrics",
-        description=(
-            "Replay a ROS 1 bag without a master. With --slam, run SLAM over its /scan and /odom and write the "
-            "map (map_server .yaml + .pgm), the trajectory (CSV), a PNG of map and trajectories and metrics.json "
-            "to --out. ATE is computed after an SE(2) alignment, RPE over consecutive processed scans; the "
-            "replayed map and poses are compared with the recorded /map and live SLAM pose (/tf map->odom). "
-            "With --plan, RRT* is run again (seeded, fixed iterations) to every recorded /move_base_simple/goal "
-            "on the replayed and on the recorded map (plans.json). Files in --out are byte-identical for the "
-            "same bag and options (timings appear only in the printed summary). A recording that was killed "
-            "(.bag.active, no index) is read up to its last whole chunk from a rebuilt copy; the input is never "
-            "written."
-        ),
-    )
-    parser.add_argument("bag", type=Path, help="bag with /scan and /odom (and optionally /ground_truth/odom)")
+def add_options(parser: argparse.ArgumentParser) -> None:
+    """The options that decide what a replay computes (also those a golden file records)."""
     parser.add_argument("--slam", action="store_true", help="run SLAM over the bag")
     parser.add_argument("--plan", action="store_true", help="re-plan the recorded goals (implies --slam)")
     parser.add_argument(
@@ -51,18 +44,55 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("--seed", type=seed_option, default=0, help=f"planner seed with --plan, 0..{MAX_SEED}")
     parser.add_argument(
-        "--against", type=Path, metavar="GOLDEN.json", help="exit 2 naming each metric worse than the golden file"
-    )
-    parser.add_argument("--write-golden", type=Path, metavar="GOLDEN.json", help="write the metrics as a golden file")
-    parser.add_argument("--out", type=Path, default=Path("replay_out"), help="output folder (default: replay_out)")
-    parser.add_argument(
         "--param",
         action="append",
         default=[],
         metavar="NAME=VALUE",
         help="SLAM parameter with gmapping's name, e.g. --param maxUrange=30 --param linearUpdate=0 (repeatable)",
     )
-    parser.add_argument("--json", action="store_true", help="print the metrics as one JSON object")
+
+
+def register(subparsers: Any) -> None:
+    parser: argparse.ArgumentParser = subparsers.add_parser(
+        "replay",
+        help="replay bags offline: SLAM, re-planning, comparison with the recording, golden metrics",
+        description=(
+            "Replay a ROS 1 bag without a master. With --slam, run SLAM over its /scan and /odom and write the "
+            "map (map_server .yaml + .pgm), the trajectory (CSV), a PNG of map and trajectories and metrics.json "
+            "to --out. ATE is computed after an SE(2) alignment, RPE over consecutive processed scans; the "
+            "replayed map and poses are compared with the recorded /map and live SLAM pose (/tf map->odom). "
+            "With --plan, RRT* is run again (seeded, fixed iterations) to every recorded /move_base_simple/goal "
+            "on the replayed and on the recorded map (plans.json). Files in --out are byte-identical for the "
+            "same bag and options (timings appear only in the printed summary). A recording that was killed "
+            "(.bag.active, no index) is read up to its last whole chunk from a rebuilt copy; the input is never "
+            "written. Given several bags or a folder, each bag is replayed into --out/NAME/ by --workers local "
+            "processes or on the Dask scheduler given by --cluster; a bag with NAME.golden.json beside it is "
+            "replayed with that file's options and held to it, the others with this command's options; "
+            "--out/report.json and --out/report.md aggregate the verdicts (exit 2 if any bag regressed, 1 if any "
+            "failed)."
+        ),
+    )
+    parser.add_argument(
+        "bags", type=Path, nargs="+", metavar="BAG", help="bag(s) with /scan and /odom, or folders of bags"
+    )
+    add_options(parser)
+    parser.add_argument(
+        "--against", type=Path, metavar="GOLDEN.json", help="exit 2 naming each metric worse than the golden file"
+    )
+    parser.add_argument("--write-golden", type=Path, metavar="GOLDEN.json", help="write the metrics as a golden file")
+    parser.add_argument("--out", type=Path, default=Path("replay_out"), help="output folder (default: replay_out)")
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=os.cpu_count() or 1,
+        help="local worker processes for several bags (default: the number of CPUs; 1 replays them in turn)",
+    )
+    parser.add_argument(
+        "--cluster",
+        metavar="ADDRESS",
+        help="replay several bags on this Dask distributed scheduler (e.g. tcp://127.0.0.1:8786) instead",
+    )
+    parser.add_argument("--json", action="store_true", help="print the metrics (or the report) as one JSON object")
     parser.set_defaults(handler=run)
 
 
@@ -75,55 +105,89 @@ def _options(args: argparse.Namespace) -> list[str]:
     return options
 
 
-def _replay(args: argparse.Namespace, config: SlamConfig) -> SessionReplay:
-    """Replay the bag (a rebuilt copy in a temporary folder when it has no index)."""
+def _job(args: argparse.Namespace, bag: Path, out: Path, golden: Path | None) -> BagJob:
+    """The job ``args`` describe for ``bag`` (budgets and seeds are checked by the option types)."""
+    if not (args.slam or args.plan):
+        raise InvalidInputError(f"nothing to do: give --slam and/or --plan (for {bag})")
     plan = PlanOptions(args.plan_iterations, args.seed, args.plan_first) if args.plan else None
-    bar: Any = None
-    progress = None
-    if sys.stderr.isatty():
-        bar = tqdm(desc="replay", unit="scan")
-        progress = bar.update
+    return BagJob(bag, out, tuple(args.param), plan, golden)
+
+
+def _golden_job(bag: Path, out: Path, golden: Path) -> BagJob:
+    """The job of a bag held to ``golden``, with the options the golden file recorded."""
+    options = json.loads(golden.read_text(encoding="utf-8")).get("options", [])
+    parser = argparse.ArgumentParser(prog=f"options of {golden}", add_help=False, exit_on_error=False)
+    add_options(parser)
     try:
-        with tempfile.TemporaryDirectory(prefix="mrs_nav_replay_") as work:
-            bag, note = readable_bag(args.bag, Path(work))
-            if note:
-                print(f"NOTE: {note}", file=sys.stderr)
-            return replay_session(bag, config, plan, progress)
-    finally:
-        if bar is not None:
-            bar.close()
+        recorded, unknown = parser.parse_known_args([str(o) for o in options])
+    except argparse.ArgumentError as err:
+        raise InvalidInputError(f"golden file {golden}: bad options: {err}") from None
+    if unknown:
+        raise InvalidInputError(f"golden file {golden}: unknown options {unknown}")
+    return _job(recorded, bag, out, golden)
 
 
 def run(args: argparse.Namespace) -> int:
-    if not (args.slam or args.plan):
-        return fail("nothing to do: give --slam and/or --plan")
+    if len(args.bags) > 1 or args.bags[0].is_dir():
+        return _run_batch(args)
+    bag = args.bags[0]
+    job = _job(args, bag, args.out, args.against)
     check_writable(args.out, "--out", folder=True)
     if args.write_golden:
         check_writable(args.write_golden, "--write-golden")
-    config = SlamConfig.from_assignments(args.param)
-    golden = load_golden(args.against) if args.against else None
-    session = _replay(args, config)
-    result = session.slam
-    if not result.estimate:
-        return fail(f"bag {args.bag}: no scan could be paired with odometry ({result.scans_read} scans read)")
-    args.out.mkdir(parents=True, exist_ok=True)
-    paths = write_outputs(result, args.out)
-    paths.update(write_session_outputs(session, args.out))
+    bar: Any = tqdm(desc="replay", unit="scan") if sys.stderr.isatty() else None
+    try:
+        outcome, session = replay_bag(job, bar.update if bar else None)
+    finally:
+        if bar is not None:
+            bar.close()
+    if outcome.note:
+        print(f"NOTE: {outcome.note}", file=sys.stderr)
     if args.write_golden:
-        record = make_golden(args.bag.name.removesuffix(".active"), _options(args), session.metrics)
+        record = make_golden(bag.name.removesuffix(".active"), _options(args), session.metrics)
         args.write_golden.write_text(dump_json(record), encoding="utf-8")
-    summary = result.summary()
-    summary["map_yaml"] = str(paths["map_yaml"])
+    summary = outcome.summary
+    summary["map_yaml"] = str(args.out / "slam_map.yaml")
     summary["metrics"] = session.metrics
-    found = regressions(session.metrics, golden) if golden is not None else []
-    if golden is not None:
-        summary["regressions"] = [r.describe() for r in found]
+    if args.against is not None:
+        summary["regressions"] = list(outcome.regressions)
     if args.json:
         print_json(summary)
     else:
         for key, value in summary.items():
             print(f"{key}: {value}")
-    if found:
-        print(f"REGRESSED against {args.against}: " + "; ".join(r.describe() for r in found), file=sys.stderr)
+    if outcome.regressions:
+        print(f"REGRESSED against {args.against}: " + "; ".join(outcome.regressions), file=sys.stderr)
         return 2
     return 0
+
+
+def _run_batch(args: argparse.Namespace) -> int:
+    if args.against or args.write_golden:
+        return fail("--against and --write-golden take one bag; several bags are held to NAME.golden.json beside them")
+    bags = find_bags(args.bags)
+    check_writable(args.out, "--out", folder=True)
+    jobs = []
+    for bag in bags:
+        out = args.out / bag.name.removesuffix(".active").removesuffix(".bag")
+        golden = golden_beside(bag)
+        jobs.append(_golden_job(bag, out, golden) if golden else _job(args, bag, out, None))
+    bar: Any = tqdm(total=len(jobs), desc="replay", unit="bag") if sys.stderr.isatty() else None
+    try:
+        outcomes = run_jobs(jobs, args.workers, args.cluster, (lambda _: bar.update()) if bar else None)
+    finally:
+        if bar is not None:
+            bar.close()
+    report = aggregate(outcomes)
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "report.json").write_text(dump_json(report), encoding="utf-8")
+    table = markdown_report(outcomes)
+    (args.out / "report.md").write_text(table, encoding="utf-8")
+    if args.json:
+        print_json(report)
+    else:
+        print(table, end="")
+    verdicts = [o.verdict for o in outcomes]
+    if "error" in verdicts:
+        return 1
+    return 2 if "regressed" in verdicts else 0

@@ -27,8 +27,12 @@ def _convert(name: str, value: Any, default: T) -> T:
         if isinstance(value, int) and not isinstance(value, bool):
             return value
     elif kind is float:
-        if isinstance(value, (int, float)) and not isinstance(value, bool):
-            result = float(value)
+        # roslaunch hands ``value="nan"`` over as a string; any text Python reads as a number is one.
+        if isinstance(value, (int, float, str)) and not isinstance(value, bool):
+            try:
+                result = float(value)
+            except ValueError:
+                raise InvalidInputError(f"~{name}: expected a number, got {value!r}") from None
             if math.isnan(result) and not math.isnan(default):
                 raise InvalidInputError(f"~{name}: expected a number, got NaN")
             return result

@@ -41,7 +41,7 @@ def killed(tmp_path):
     ("args", "message"),
     [
         (["{cut}", "--slam"], "ERROR: bag {cut} is truncated: its index should start at byte"),
-        (["{bag}", "--plan", "--plan-iterations", "0"], "ERROR: --plan-iterations must be >= 1"),
+        (["{bag}", "--plan", "--plan-iterations", "0"], "ERROR: mrs-nav replay: argument --plan-iterations: must"),
         (["{bag}"], "ERROR: nothing to do: give --slam and/or --plan"),
         (["{bag}", "--slam", "--against", "{missing}"], "ERROR: cannot read golden file {missing}"),
     ],

@@ -1,0 +1,97 @@
+"""Regression replays of many bags: serial, local worker processes, and a local two-worker Dask cluster.
+
+``--bags`` copies of the regression bags (``tests/data/bags``, cycled, each with its golden file, so each copy is
+replayed with SLAM and re-planning as the regression suite does) are replayed three ways through
+:func:`mrs_nav.replay.batch.run_jobs`: in turn in this process, by ``--workers`` local processes, and on a Dask
+``LocalCluster`` of ``--workers`` single-threaded worker processes on 127.0.0.1. Wall time covers the whole
+batch, cluster start excluded; the per-bag outputs of each parallel run are checked byte-identical to the serial
+run's.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import tempfile
+import time
+from pathlib import Path
+
+from mrs_nav.bench.replay import DEFAULT_BAGS
+from mrs_nav.errors import MrsNavError
+from mrs_nav.replay.batch import BagJob, find_bags, run_jobs
+from mrs_nav.replay.golden import load_golden
+from mrs_nav.replay.session_replay import PlanOptions
+from mrs_nav.tables import markdown_table
+
+SPEEDUP_TARGET = 0.6  # issue: wall time with 2 workers <= 0.6x the serial time
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--bags", type=int, default=20, help="how many bags to replay (default: 20)")
+    parser.add_argument("--workers", type=int, default=2, help="local worker processes (default: 2)")
+    parser.add_argument("--source", type=Path, default=DEFAULT_BAGS, help=f"regression bags (default: {DEFAULT_BAGS})")
+
+
+def _jobs(source: Path, count: int, folder: Path, out: Path) -> list[BagJob]:
+    """``count`` copies of the source bags, each replayed with the options of its golden file."""
+    originals = [b for b in find_bags([source]) if b.with_name(b.stem + ".golden.json").is_file()]
+    if not originals:
+        raise MrsNavError(f"no bags with golden files in {source}")
+    jobs = []
+    for i in range(count):
+        original = originals[i % len(originals)]
+        bag = folder / f"{original.stem}_{i:03d}.bag"
+        shutil.copy(original, bag)
+        golden = original.with_name(original.stem + ".golden.json")
+        load_golden(golden)
+        jobs.append(BagJob(bag, out / bag.stem, (), PlanOptions(), golden))
+    return jobs
+
+
+def _files(out: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(out)): p.read_bytes() for p in sorted(out.rglob("*")) if p.is_file()}
+
+
+def run(args: argparse.Namespace) -> str:
+    from distributed import LocalCluster  # noqa: PLC0415 - only this benchmark starts a cluster
+
+    rows: list[list[object]] = []
+    verdicts = []
+    with tempfile.TemporaryDirectory(prefix="mrs_nav_bench_batch_") as tmp:
+        root = Path(tmp)
+        (root / "bags").mkdir()
+        outputs: dict[str, Path] = {}
+        walls: dict[str, float] = {}
+        ways: list[tuple[str, int, str | None]] = [
+            ("serial", 1, None),
+            (f"{args.workers} local workers", args.workers, None),
+        ]
+        with LocalCluster(  # type: ignore[no-untyped-call]
+            n_workers=args.workers, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None
+        ) as cluster:
+            ways.append((f"Dask LocalCluster, {args.workers} workers", 1, cluster.scheduler_address))
+            for label, workers, address in ways:
+                out = root / label.replace(" ", "_").replace(",", "")
+                jobs = _jobs(args.source, args.bags, root / "bags", out)
+                start = time.perf_counter()
+                outcomes = run_jobs(jobs, workers, address)
+                walls[label] = time.perf_counter() - start
+                outputs[label] = out
+                failed = [o.name for o in outcomes if o.verdict != "passed"]
+                same = _files(out) == _files(outputs["serial"])
+                ratio = walls[label] / walls["serial"]
+                rows.append([label, walls[label], ratio, len(outcomes) - len(failed), "yes" if same else "NO"])
+                if address is not None or workers > 1:
+                    ok = ratio <= SPEEDUP_TARGET and same and not failed
+                    verdicts.append(
+                        f"- {label}: {ratio:.2f}x the serial time, target <= {SPEEDUP_TARGET}: "
+                        + ("PASS" if ok else "FAIL")
+                    )
+    header = ["how", "wall [s]", "x serial time", "bags passed", "outputs identical to serial"]
+    return (
+        f"### Regression replays of {args.bags} bags (SLAM + re-planning, held to their goldens)\n\n"
+        + markdown_table(header, rows)
+        + "\n\n"
+        + "\n".join(verdicts)
+        + "\n"
+    )

@@ -1,0 +1,216 @@
+"""Replaying many recorded sessions at once: one job per bag, fanned out to local processes or a Dask cluster.
+
+A :class:`BagJob` names a bag, its output folder, its SLAM parameters and planning options and, optionally, the
+golden file it is held to. :func:`replay_bag` runs one job exactly as ``mrs-nav replay BAG`` does (the same
+functions, in the same order), so a bag's output files are byte-identical whichever process, machine or order
+ran it. :func:`run_jobs` runs them in this process, in a pool of local worker processes, or on an existing
+Dask distributed scheduler (``tcp://host:port``) and returns the outcomes sorted by bag name; the aggregate
+(:func:`aggregate`, :func:`markdown_report`) holds no timing, so it is byte-identical too.
+
+Worker processes are started with ``forkserver``: the parent may hold threads (a progress bar, Dask's event
+loop) that ``fork`` would copy mid-lock.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import tempfile
+from collections.abc import Callable, Iterable, Sequence
+from concurrent import futures as local
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from mrs_nav.bag.salvage import readable_bag
+from mrs_nav.errors import InvalidInputError, MrsNavError
+from mrs_nav.replay.golden import load_golden, regressions
+from mrs_nav.replay.session_replay import PlanOptions, SessionReplay, replay_session, write_session_outputs
+from mrs_nav.replay.slam_replay import write_outputs
+from mrs_nav.slam.config import SlamConfig
+from mrs_nav.tables import markdown_table
+
+GOLDEN_SUFFIX = ".golden.json"
+
+
+@dataclass(frozen=True)
+class BagJob:
+    """One bag to replay into ``out_dir`` with SLAM ``params`` (``NAME=VALUE``), re-planning when ``plan``."""
+
+    bag: Path
+    out_dir: Path
+    params: tuple[str, ...] = ()
+    plan: PlanOptions | None = None
+    golden: Path | None = None
+
+    @property
+    def name(self) -> str:
+        return self.bag.name.removesuffix(".active").removesuffix(".bag")
+
+
+@dataclass(frozen=True)
+class BagOutcome:
+    """What one job gave: its metrics and regressions against the golden, or the one-line error that stopped it.
+
+    ``summary`` (SLAM figures, including timings) and ``note`` (how an unindexed bag was read) are for printing
+    only; :func:`aggregate` leaves them out.
+    """
+
+    name: str
+    out_dir: Path
+    metrics: dict[str, float | int | None] = field(default_factory=dict)
+    regressions: tuple[str, ...] = ()
+    has_golden: bool = False
+    error: str | None = None
+    summary: dict[str, Any] = field(default_factory=dict)
+    note: str | None = None
+
+    @property
+    def verdict(self) -> str:
+        """``error``, ``regressed``, ``passed`` (held to a golden file) or ``replayed`` (no golden file)."""
+        if self.error is not None:
+            return "error"
+        if self.regressions:
+            return "regressed"
+        return "passed" if self.has_golden else "replayed"
+
+
+def golden_beside(bag: Path) -> Path | None:
+    """``NAME.golden.json`` next to ``NAME.bag`` (or ``NAME.bag.active``), if there is one."""
+    name = bag.name.removesuffix(".active").removesuffix(".bag")
+    candidate = bag.with_name(name + GOLDEN_SUFFIX)
+    return candidate if candidate.is_file() else None
+
+
+def find_bags(paths: Iterable[Path]) -> list[Path]:
+    """The bags named: files as given, folders as their ``*.bag`` and ``*.bag.active`` files, sorted by name."""
+    bags: list[Path] = []
+    for path in paths:
+        if path.is_dir():
+            bags += sorted(p for p in path.iterdir() if p.is_file() and p.name.endswith((".bag", ".bag.active")))
+        elif path.is_file():
+            bags.append(path)
+        else:
+            raise InvalidInputError(f"{path}: no such bag or folder")
+    if not bags:
+        raise InvalidInputError("no bags found in " + ", ".join(str(p) for p in paths))
+    names = [b.name.removesuffix(".active") for b in bags]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise InvalidInputError(f"bag names must be unique (their output folders are named after them): {twice}")
+    return sorted(bags, key=lambda b: b.name)
+
+
+def replay_bag(job: BagJob, progress: Callable[[int], None] | None = None) -> tuple[BagOutcome, SessionReplay]:
+    """Replay one bag and write its outputs to ``job.out_dir``; raises :class:`MrsNavError` on bad input."""
+    config = SlamConfig.from_assignments(list(job.params))
+    golden = load_golden(job.golden) if job.golden else None
+    with tempfile.TemporaryDirectory(prefix="mrs_nav_replay_") as work:
+        bag, note = readable_bag(job.bag, Path(work))
+        session = replay_session(bag, config, job.plan, progress)
+    result = session.slam
+    if not result.estimate:
+        read = result.scans_read
+        raise InvalidInputError(f"bag {job.bag}: no scan could be paired with odometry ({read} scans read)")
+    job.out_dir.mkdir(parents=True, exist_ok=True)
+    write_outputs(result, job.out_dir)
+    write_session_outputs(session, job.out_dir)
+    found = regressions(session.metrics, golden) if golden is not None else []
+    outcome = BagOutcome(
+        name=job.name,
+        out_dir=job.out_dir,
+        metrics=dict(session.metrics),
+        regressions=tuple(r.describe() for r in found),
+        has_golden=golden is not None,
+        summary=result.summary(),
+        note=note,
+    )
+    return outcome, session
+
+
+def run_job(job: BagJob) -> BagOutcome:
+    """:func:`replay_bag` for a worker: a domain error becomes the outcome's ``error`` instead of an exception."""
+    try:
+        return replay_bag(job)[0]
+    except MrsNavError as err:
+        return BagOutcome(name=job.name, out_dir=job.out_dir, has_golden=job.golden is not None, error=str(err))
+
+
+def run_jobs(
+    jobs: Sequence[BagJob],
+    workers: int = 1,
+    cluster: str | None = None,
+    done: Callable[[BagOutcome], None] | None = None,
+) -> list[BagOutcome]:
+    """Run every job (``workers`` local processes, or the Dask scheduler at ``cluster``); sorted by bag name.
+
+    ``done`` is called in this process as each job finishes (a progress bar).
+    """
+    if workers < 1:
+        raise InvalidInputError(f"--workers must be >= 1, got {workers}")
+    outcomes: list[BagOutcome] = []
+
+    def finished(outcome: BagOutcome) -> None:
+        outcomes.append(outcome)
+        if done is not None:
+            done(outcome)
+
+    if cluster is not None:
+        _run_on_dask(jobs, cluster, finished)
+    elif workers == 1 or len(jobs) == 1:
+        for job in jobs:
+            finished(run_job(job))
+    else:
+        context = multiprocessing.get_context("forkserver")
+        with local.ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=context) as pool:
+            for future in local.as_completed([pool.submit(run_job, job) for job in jobs]):
+                finished(future.result())
+    return sorted(outcomes, key=lambda o: o.name)
+
+
+def _run_on_dask(jobs: Sequence[BagJob], address: str, finished: Callable[[BagOutcome], None]) -> None:
+    """The jobs on the Dask distributed scheduler at ``address``; its workers need mrs_nav installed."""
+    try:
+        from distributed import Client, as_completed  # noqa: PLC0415 - only --cluster needs it
+    except ImportError:
+        raise InvalidInputError("--cluster needs Dask distributed: pip install distributed") from None
+    try:
+        client = Client(address, timeout=10)  # type: ignore[no-untyped-call]
+    except (OSError, TimeoutError) as err:
+        raise InvalidInputError(f"--cluster {address}: no Dask scheduler answered ({err})") from None
+    with client:
+        # pure=False: two jobs with equal fields are still two replays (and never served from a cache).
+        for future in as_completed(client.map(run_job, list(jobs), pure=False)):  # type: ignore[no-untyped-call]
+            finished(future.result())
+
+
+def aggregate(outcomes: Sequence[BagOutcome]) -> dict[str, Any]:
+    """The report of a batch as JSON-ready data: per bag its verdict, metrics and regressions, and the counts."""
+    verdicts = [o.verdict for o in outcomes]
+    return {
+        "bags": [
+            {
+                "bag": o.name,
+                "verdict": o.verdict,
+                "error": o.error,
+                "regressions": list(o.regressions),
+                "metrics": o.metrics,
+            }
+            for o in outcomes
+        ],
+        "counts": {v: verdicts.count(v) for v in ("passed", "regressed", "replayed", "error")},
+    }
+
+
+def markdown_report(outcomes: Sequence[BagOutcome]) -> str:
+    """The report as a markdown table: one row per bag, its verdict and the metrics every bag has."""
+    columns = sorted(set.intersection(*(set(o.metrics) for o in outcomes))) if outcomes else []
+    rows: list[list[object]] = [
+        [
+            o.name,
+            o.verdict,
+            *(o.metrics.get(c, "-") for c in columns),
+            (o.error or "; ".join(o.regressions)).replace("|", "/"),
+        ]
+        for o in outcomes
+    ]
+    return markdown_table(["bag", "verdict", *columns, "why"], rows) + "\n"
