@@ -11,8 +11,9 @@ stamp=$venv/.mrs_nav-installed
 apt_packages=(
   ros-core rosbash rospack-tools python3-rosbag python3-rostest librostest-dev catkin python3-catkin-pkg cmake g++
   python3-tf2-ros python3-tf python3-tf2-geometry-msgs
-  python3-std-msgs python3-geometry-msgs python3-nav-msgs python3-sensor-msgs
+  python3-std-msgs python3-std-srvs python3-geometry-msgs python3-nav-msgs python3-sensor-msgs
   python3-visualization-msgs python3-tf2-msgs ros-robot-state-publisher
+  python3-actionlib python3-actionlib-msgs python3-move-base-msgs
   python3-pyode python3-numpy python3-scipy python3-yaml python3-venv python3-pip
   xvfb xdotool imagemagick
   libsdformat-dev pkg-config

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import math
 import threading
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from mrs_nav.maps.obstacles import Obstacles
+from mrs_nav.maps.rasterize import rasterize_world
 from mrs_nav.maps.world import load_world
 from tests.rosharness import REPO
 
@@ -26,6 +27,7 @@ class TruthTrack:
         self.obstacles = Obstacles.from_world(load_world(REPO / "worlds" / world))
         self._lock = threading.Lock()
         self.samples: list[tuple[float, float, float]] = []
+        self.yaws: list[float] = []
         self.contacts = 0
         self.sub = rospy.Subscriber("/ground_truth/odom", Odometry, self._on_msg, queue_size=1000, tcp_nodelay=True)
         self.contacts_sub = rospy.Subscriber("/ground_truth/contacts", UInt32, self._on_contacts, queue_size=10)
@@ -34,9 +36,11 @@ class TruthTrack:
         self.contacts = int(msg.data)
 
     def _on_msg(self, msg: Any) -> None:
-        p = msg.pose.pose.position
+        p, q = msg.pose.pose.position, msg.pose.pose.orientation
+        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
         with self._lock:
             self.samples.append((msg.header.stamp.to_sec(), p.x, p.y))
+            self.yaws.append(yaw)
 
     def array(self) -> np.ndarray:
         with self._lock:
@@ -45,6 +49,15 @@ class TruthTrack:
     def last(self) -> tuple[float, float, float] | None:
         with self._lock:
             return self.samples[-1] if self.samples else None
+
+    def last_yaw(self) -> float:
+        with self._lock:
+            return self.yaws[-1]
+
+    def since(self, t: float) -> np.ndarray:
+        """The ``(t, x, y)`` samples stamped at or after sim time ``t``."""
+        samples = self.array()
+        return samples[samples[:, 0] >= t]
 
     def min_clearance(self) -> float:
         """Smallest distance (m) from the robot's centre to an obstacle surface; below the footprint radius the
@@ -79,5 +92,55 @@ class StatusLog:
         self.sub.unregister()
 
 
-def trajectory_lines(path: Path) -> list[list[float]]:
-    return [[float(v) for v in line.split()] for line in path.read_text().splitlines() if not line.startswith("#")]
+def world_map_msg(rospy: Any, world: str, margin: float = 0.2) -> Any:
+    """The map of a world file (0.05 m cells, free for ``margin`` m outside the walls) as a
+    nav_msgs/OccupancyGrid."""
+    from nav_msgs.msg import OccupancyGrid
+
+    grid = rasterize_world(load_world(REPO / "worlds" / world), 0.05, margin=margin)
+    msg = OccupancyGrid()
+    msg.header.frame_id = "map"
+    msg.header.stamp = rospy.Time.now()
+    msg.info.resolution = grid.resolution
+    msg.info.width, msg.info.height = grid.width, grid.height
+    msg.info.origin.position.x, msg.info.origin.position.y = grid.origin[0], grid.origin[1]
+    msg.info.origin.orientation.w = 1.0
+    msg.data = grid.values.ravel().tolist()
+    return msg
+
+
+class IdentityCorrection:
+    """map -> odom as SLAM would send it (identity: odometry starts at the true start pose), every 10 ms of wall
+    time from a plain thread (a rospy.Timer dies when sim time jumps back between test modules; a static
+    transform would outlive the module in the test process), dated ``ahead`` s of sim time in the future as SLAM
+    does: at maximum rate 10 ms of wall time can be more sim time than the navigation's freshness limit.
+    :meth:`stop` ends it, as a SLAM node that died."""
+
+    ahead = 0.5
+
+    def __init__(self, rospy: Any) -> None:
+        import tf2_ros
+
+        self.rospy = rospy
+        self.broadcaster = tf2_ros.TransformBroadcaster()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        from geometry_msgs.msg import TransformStamped
+
+        while not self._stop.wait(0.01):
+            identity = TransformStamped()
+            identity.header.stamp = self.rospy.Time.now() + self.rospy.Duration(self.ahead)
+            identity.header.frame_id, identity.child_frame_id = "map", "odom"
+            identity.transform.rotation.w = 1.0
+            self.broadcaster.sendTransform(identity)
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join()
+
+    def close(self) -> None:
+        self.stop()
+        self.broadcaster.pub_tf.unregister()

@@ -6,16 +6,13 @@ map -> odom transform, so the node's own behaviour is tested (goal refusal, pree
 from __future__ import annotations
 
 import math
-import threading
 from collections.abc import Iterator
 from typing import Any
 
 import pytest
 
-from mrs_nav.maps.rasterize import rasterize_world
-from mrs_nav.maps.world import load_world
-from tests.ros.navharness import FOOTPRINT_RADIUS, StatusLog, TruthTrack
-from tests.rosharness import REPO, RosMaster, wait_for
+from tests.ros.navharness import FOOTPRINT_RADIUS, IdentityCorrection, StatusLog, TruthTrack, world_map_msg
+from tests.rosharness import RosMaster, wait_for
 
 pytestmark = pytest.mark.ros
 
@@ -24,27 +21,11 @@ pytestmark = pytest.mark.ros
 MAX_RATE = ("real_time_factor:=0", "lockstep:=true")
 
 
-def arena_map_msg(rospy: Any) -> Any:
-    from nav_msgs.msg import OccupancyGrid
-
-    grid = rasterize_world(load_world(REPO / "worlds" / "simple.world"), 0.05, margin=0.2)
-    msg = OccupancyGrid()
-    msg.header.frame_id = "map"
-    msg.header.stamp = rospy.Time.now()
-    msg.info.resolution = grid.resolution
-    msg.info.width, msg.info.height = grid.width, grid.height
-    msg.info.origin.position.x, msg.info.origin.position.y = grid.origin[0], grid.origin[1]
-    msg.info.origin.orientation.w = 1.0
-    msg.data = grid.values.ravel().tolist()
-    return msg
-
-
 @pytest.fixture(scope="module")
 def navigation(ros_master: RosMaster, rospy_node: Any) -> Iterator[dict[str, Any]]:
     """Simulator + rrt_navigation (slam:=false) + a known map and map -> odom from this process."""
     rospy = rospy_node
-    import tf2_ros
-    from geometry_msgs.msg import PoseStamped, TransformStamped
+    from geometry_msgs.msg import PoseStamped
     from nav_msgs.msg import OccupancyGrid
 
     with (
@@ -53,31 +34,15 @@ def navigation(ros_master: RosMaster, rospy_node: Any) -> Iterator[dict[str, Any
     ):
         truth = TruthTrack(rospy, "simple.world")
         wait_for(lambda: truth.last() is not None, 60.0, "ground truth from the simulator")
-        # map -> odom as SLAM would send it (identity: odometry starts at the true start pose), every 20 ms of
-        # wall time from a plain thread (a rospy.Timer dies when sim time jumps back between test modules; a
-        # static transform would outlive this module in the test process)
-        tf_pub = tf2_ros.TransformBroadcaster()
-        stop = threading.Event()
-
-        def send_identity() -> None:
-            while not stop.wait(0.02):
-                identity = TransformStamped()
-                identity.header.stamp = rospy.Time.now()
-                identity.header.frame_id, identity.child_frame_id = "map", "odom"
-                identity.transform.rotation.w = 1.0
-                tf_pub.sendTransform(identity)
-
-        sender = threading.Thread(target=send_identity, daemon=True)
-        sender.start()
+        correction = IdentityCorrection(rospy)
         map_pub = rospy.Publisher("/map", OccupancyGrid, queue_size=1, latch=True)
-        map_pub.publish(arena_map_msg(rospy))
+        map_pub.publish(world_map_msg(rospy, "simple.world"))
         status = StatusLog(rospy, "/rrt_navigation/status")
         goal_pub = rospy.Publisher("/move_base_simple/goal", PoseStamped, queue_size=1, latch=True)
         wait_for(lambda: goal_pub.get_num_connections() > 0 and truth.last() is not None, 30.0, "the navigation node")
         yield {"rospy": rospy, "status": status, "truth": truth, "goal": goal_pub, "procs": (sim, nav)}
-        stop.set()
-        sender.join()
-        for pub in (map_pub, goal_pub, tf_pub.pub_tf):
+        correction.close()
+        for pub in (map_pub, goal_pub):
             pub.unregister()
         status.close()
         truth.close()

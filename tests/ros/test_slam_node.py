@@ -115,3 +115,45 @@ def test_map_and_pose_while_driving(slam_sim: tuple[Any, Any]) -> None:
         for thing in (grid.sub, truth.sub, cmd, bad_scans):
             thing.unregister()
         listener.unregister()
+
+
+def test_a_scan_in_another_frame_never_resets_the_map(slam_sim: tuple[Any, Any]) -> None:
+    """Issue 12: one /scan whose frame_id is not the laser's used to start a new map. Now a frame tf knows is
+    mapped with its own mounting, an unknown one is dropped with a warning; only ~reset starts a new map."""
+    rospy, proc = slam_sim
+    from nav_msgs.msg import OccupancyGrid
+    from rosgraph_msgs.msg import Log
+    from sensor_msgs.msg import LaserScan
+    from std_srvs.srv import Empty
+
+    grid = Latest(rospy, "/map", OccupancyGrid)
+    scans = Latest(rospy, "/scan", LaserScan)
+    logs: list[str] = []
+    rosout = rospy.Subscriber("/rosout_agg", Log, lambda m: logs.append(m.msg) if m.name == "/slam" else None)
+    publisher = rospy.Publisher("/scan", LaserScan, queue_size=10)
+    try:
+        wait_for(lambda: grid.msg is not None and scans.msg is not None, 60.0, "/map and /scan")
+        known_before = sum(1 for v in grid.msg.data if v >= 0)
+        assert known_before > 1000
+        for frame in ("base_link", "no_such_frame") * 5:
+            with scans.lock:
+                scan = scans.msg
+            scan.header.frame_id = frame
+            scan.header.stamp = rospy.Time.from_sec(rospy.get_time())
+            publisher.publish(scan)
+            time.sleep(0.05)
+        count = grid.count
+        # Two more map publications (scans keep coming through temporalUpdate while the robot stands).
+        wait_for(lambda: grid.count >= count + 2, 60.0, "map updates after the foreign-frame scans")
+        assert proc.poll() is None, "a node died"
+        known_after = sum(1 for v in grid.msg.data if v >= 0)
+        assert known_after >= 0.95 * known_before, (known_before, known_after)
+        wait_for(lambda: any("no_such_frame" in m for m in logs), 30.0, "a warning naming the unknown frame")
+
+        rospy.wait_for_service("/slam/reset", timeout=30.0)
+        rospy.ServiceProxy("/slam/reset", Empty)()
+        wait_for(lambda: any("reset requested" in m for m in logs), 30.0, "the reset logged")
+        assert proc.poll() is None
+    finally:
+        for thing in (grid.sub, scans.sub, rosout, publisher):
+            thing.unregister()

@@ -16,6 +16,7 @@ from typing import Any
 
 import zenoh
 
+from mrs_nav.bridge.keys import status_key
 from tests.rosharness import REPO, RosMaster, free_port, stop, wait_for
 
 
@@ -40,7 +41,7 @@ def wait_bridge_up(session: zenoh.Session, proc: Any, what: str) -> None:
 
     def answered() -> bool:
         assert proc.poll() is None, f"{what}: roslaunch exited"
-        return any(r.err is not None for r in session.get("mrs_nav/@bridge/publish/nothing_here", timeout=0.5))
+        return any(r.ok is not None for r in session.get(status_key("mrs_nav"), timeout=0.5))
 
     wait_for(answered, 30, f"{what} to answer on Zenoh")
 

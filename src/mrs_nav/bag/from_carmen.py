@@ -1,74 +1,189 @@
 """Converting a CARMEN log into a ROS 1 bag that the SLAM replay (and ``rosbag play``) can use.
 
-Topics written (frames of REP 105): ``/scan`` (``sensor_msgs/LaserScan`` in ``base_scan``, the log's beam
-geometry), ``/ground_truth/odom`` (the log's corrected poses, ``map -> base_footprint``), ``/odom`` and ``/tf``
-(``odom -> base_footprint``: odometry integrated from ground-truth increments with the odometry motion model's
-noise, see :mod:`mrs_nav.motion_model`) and ``/tf_static`` (``base_footprint -> base_scan``, identity: the
-logged poses are the laser's). Bag time is the log's timestamp; odometry shares each scan's stamp.
+Topics written (frames of REP 105): ``/scan`` (``sensor_msgs/LaserScan`` in ``base_scan``, CARMEN's beam
+geometry), ``/ground_truth/odom`` (the log's FLASER poses, ``map -> base_footprint``; in a corrected log that is
+another SLAM's output, a reference rather than ground truth), ``/odom`` and ``/tf`` (``odom -> base_footprint``)
+and ``/tf_static`` (``base_footprint -> base_scan``, identity: the logged poses are the laser's). Bag time is
+the scan's timestamp; odometry shares each scan's stamp.
+
+Odometry: by default the robot's real odometry, integrated from the log's ODOM increments
+(:func:`mrs_nav.bag.carmen.read_log`) starting at the first scan's pose, one ``/odom`` per ODOM line that falls
+between two scans in time order plus one at each scan's stamp; a scan with no odometry since the
+previous one (a gap) repeats the previous odometry pose, so the scan matcher has to find that motion alone.
+With ``noise`` given (``--odom synthetic``), or when the log has no ODOM lines at all, odometry is synthesised
+from the logged poses' increments with the odometry motion model's noise (:mod:`mrs_nav.motion_model`).
+
+Stamps: scans must be strictly increasing in time. A scan stamped at or before its predecessor (duplicate,
+constant or backwards stamps) is restamped: a run of such scans is spread evenly between the last good stamp and
+the next later one (at the end of the log, at the median of the log's increasing intervals, 1 s when there are
+none); the repairs are counted in a note. The scans' order in the file is kept.
 """
 
 from __future__ import annotations
 
+import math
+import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from mrs_nav.bag.carmen import CarmenScan, read_flaser
+from mrs_nav.bag.carmen import CarmenLog, CarmenScan, read_log
 from mrs_nav.bag.io import BagWriter
 from mrs_nav.bag.messages import LASER_SCAN, ODOMETRY, laser_scan_message, odometry_message, tf_message
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
-from mrs_nav.motion_model import OdometryNoise, noisy_odometry
+from mrs_nav.motion_model import DEFAULT_ALPHAS, OdometryNoise, noisy_odometry
 from mrs_nav.slam.scan import LaserScanData
 
 TF = "tf2_msgs/msg/TFMessage"
+FALLBACK_INTERVAL_S = 1.0  # scan interval used to restamp a log that has no increasing stamps at all
 
 
 @dataclass(frozen=True)
 class ConversionSummary:
-    """What a conversion wrote: scan count and the log's duration in seconds."""
+    """What a conversion wrote: scan count, the (repaired) log's duration in seconds, which odometry, and notes
+    on what was repaired or assumed (one line each, for ``NOTE:`` output)."""
 
     scans: int
     duration_s: float
+    odometry: str
+    notes: tuple[str, ...] = ()
 
 
 def carmen_to_bag(
     log: Path,
     bag: Path,
-    noise: OdometryNoise,
-    seed: int,
+    noise: OdometryNoise | None = None,
+    seed: int = 0,
     *,
     max_range: float | None = None,
     progress: Callable[[int], None] | None = None,
 ) -> ConversionSummary:
-    """Write the FLASER records of ``log`` to ``bag``; ``max_range`` defaults to the log's largest reading."""
-    scans: list[CarmenScan] = list(read_flaser(log))
+    """Write the scans of ``log`` to ``bag`` (replacing it); odometry from the log unless ``noise`` is given.
+
+    ``max_range`` defaults to the log's largest reading (a SICK reports its limit for "no return").
+    """
+    content = read_log(log)
+    scans = content.scans
     if not scans:
         raise InvalidInputError(f"CARMEN log {log} has no FLASER lines")
-    limit = max_range if max_range is not None else max(float(np.max(s.ranges)) for s in scans)
-    odom = noisy_odometry([s.pose for s in scans], noise, np.random.default_rng(seed))
-    with BagWriter(bag) as writer:
-        first = scans[0].timestamp
-        writer.write(
-            "/tf_static",
-            TF,
-            _ns(first),
-            tf_message(Pose2D(0.0, 0.0, 0.0), first, "base_footprint", "base_scan"),
-            latching=True,
+    notes: list[str] = []
+    stamps, restamped, interval = repaired_stamps([s.timestamp for s in scans])
+    if restamped:
+        notes.append(
+            f"{log}: {restamped} of {len(scans)} scans were stamped at or before the previous scan; restamped "
+            f"evenly between their good neighbours (at the end of the log: {interval:.3f} s apart, the median "
+            "increasing interval)"
         )
-        for seq, (scan, pose) in enumerate(zip(scans, odom, strict=True)):
-            t = scan.timestamp
-            data = LaserScanData(scan.angle_min, scan.angle_increment, 0.0, limit, scan.ranges)
-            writer.write("/odom", ODOMETRY, _ns(t), odometry_message(pose, t, "odom", "base_footprint", seq))
-            writer.write("/tf", TF, _ns(t), tf_message(pose, t, "odom", "base_footprint"))
-            truth = odometry_message(scan.pose, t, "map", "base_footprint", seq)
-            writer.write("/ground_truth/odom", ODOMETRY, _ns(t), truth)
-            writer.write("/scan", LASER_SCAN, _ns(t), laser_scan_message(data, t, "base_scan", seq))
-            if progress is not None:
-                progress(1)
-    return ConversionSummary(len(scans), scans[-1].timestamp - first)
+    if noise is None and content.odom_lines == 0:
+        notes.append(f"{log}: no ODOM lines; odometry synthesised from the logged poses with the default noise")
+        noise = OdometryNoise.of(DEFAULT_ALPHAS)
+    between: list[list[tuple[float, Pose2D]]] = [[] for _ in scans]
+    if noise is None:
+        odom, between = log_odometry(content, stamps)
+        kind = "log"
+        if content.gaps:
+            notes.append(f"{log}: {content.gaps} scans have no odometry since the previous scan; odometry held there")
+    else:
+        odom = noisy_odometry([s.pose for s in scans], noise, np.random.default_rng(seed))
+        kind = "synthetic"
+    limit = max_range if max_range is not None else max(float(np.max(s.ranges)) for s in scans)
+    if not limit > 0.0:
+        raise InvalidInputError(f"CARMEN log {log}: every range is 0, so the laser's range limit is unknown")
+    _write(bag, scans, stamps, (odom, between), limit=limit, progress=progress)
+    return ConversionSummary(len(scans), stamps[-1] - stamps[0], kind, tuple(notes))
+
+
+def log_odometry(content: CarmenLog, stamps: list[float]) -> tuple[list[Pose2D], list[list[tuple[float, Pose2D]]]]:
+    """Odometry poses at the scans, integrated from the log's increments from the first scan's pose (a gap
+    holds the pose), and per scan the odometry of the ODOM lines stamped strictly between the previous scan's
+    (repaired) stamp and its own, in increasing time (lines out of that order are left out)."""
+    odom = [content.scans[0].pose]
+    between: list[list[tuple[float, Pose2D]]] = [[]]
+    for k, path in enumerate(content.odometry[1:], start=1):
+        previous = odom[-1]
+        odom.append(previous.compose(path[-1][1]) if path else previous)
+        inside: list[tuple[float, Pose2D]] = []
+        for stamp, relative in path[:-1]:
+            if max(stamps[k - 1], inside[-1][0] if inside else -math.inf) < stamp < stamps[k]:
+                inside.append((stamp, previous.compose(relative)))
+        between.append(inside)
+    return odom, between
+
+
+def repaired_stamps(stamps: list[float]) -> tuple[list[float], int, float]:
+    """Strictly increasing stamps by the module's rule: (stamps, how many were changed, the interval used).
+
+    A run of scans stamped at or before the last good stamp is spread evenly between that stamp and the next
+    later one, so one late scan does not push every following scan off its own (good) stamp; a run at the end
+    of the log continues at the median increasing interval.
+    """
+    steps = np.diff(np.asarray(stamps, dtype=np.float64))
+    rising = steps[steps > 0.0]
+    interval = float(np.median(rising)) if rising.size else FALLBACK_INTERVAL_S
+    out = list(stamps)
+    changed = 0
+    i = 1
+    while i < len(out):
+        if out[i] > out[i - 1]:
+            i += 1
+            continue
+        end = i  # the run of bad stamps is out[i:end]
+        while end < len(out) and out[end] <= out[i - 1]:
+            end += 1
+        step = (out[end] - out[i - 1]) / (end - i + 1) if end < len(out) else interval
+        for j in range(i, end):
+            out[j] = out[i - 1] + (j - i + 1) * step
+        changed += end - i
+        i = end
+    return out, changed, interval
+
+
+def _write(
+    bag: Path,
+    scans: list[CarmenScan],
+    stamps: list[float],
+    odometry: tuple[list[Pose2D], list[list[tuple[float, Pose2D]]]],
+    *,
+    limit: float,
+    progress: Callable[[int], None] | None,
+) -> None:
+    """Write to a partial file beside ``bag`` and move it over ``bag`` when complete: an existing bag is
+    replaced only by a whole new one."""
+    if bag.is_dir():
+        raise InvalidInputError(f"bag {bag} is a directory")
+    partial = bag.with_name(f".{bag.name}.partial")
+    try:
+        partial.unlink(missing_ok=True)
+        with BagWriter(partial) as writer:
+            first = stamps[0]
+            writer.write(
+                "/tf_static",
+                TF,
+                _ns(first),
+                tf_message(Pose2D(0.0, 0.0, 0.0), first, "base_footprint", "base_scan"),
+                latching=True,
+            )
+            odom_seq = 0
+            for seq, (scan, t, pose, between) in enumerate(zip(scans, stamps, *odometry, strict=True)):
+                for odom_t, odom_pose in [*between, (t, pose)]:
+                    msg = odometry_message(odom_pose, odom_t, "odom", "base_footprint", odom_seq)
+                    writer.write("/odom", ODOMETRY, _ns(odom_t), msg)
+                    writer.write("/tf", TF, _ns(odom_t), tf_message(odom_pose, odom_t, "odom", "base_footprint"))
+                    odom_seq += 1
+                data = LaserScanData(scan.angle_min, scan.angle_increment, 0.0, limit, scan.ranges)
+                truth = odometry_message(scan.pose, t, "map", "base_footprint", seq)
+                writer.write("/ground_truth/odom", ODOMETRY, _ns(t), truth)
+                writer.write("/scan", LASER_SCAN, _ns(t), laser_scan_message(data, t, "base_scan", seq))
+                if progress is not None:
+                    progress(1)
+        os.replace(partial, bag)
+    except OSError as err:
+        raise InvalidInputError(f"cannot write bag {bag}: {err}") from None
+    finally:
+        partial.unlink(missing_ok=True)
 
 
 def _ns(seconds: float) -> int:

@@ -31,15 +31,17 @@ from scipy.sparse.csgraph import dijkstra
 from tqdm import tqdm
 
 from mrs_nav.errors import InvalidInputError, NoPathFoundError
-from mrs_nav.geometry import FloatArray, Pose2D
+from mrs_nav.geometry import FloatArray, Pose2D, wrap_angle
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.maps.rasterize import rasterize_world
-from mrs_nav.maps.world import World, load_world
-from mrs_nav.navigation.navigator import cell_centres, densify
+from mrs_nav.maps.world import Box, World, load_world
+from mrs_nav.navigation.navigator import GoalState, Navigator, NavigatorConfig, cell_centres, densify, rrt_planner
+from mrs_nav.navigation.obstacles import beam_ends
 from mrs_nav.planning import path_length
 from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.robot import BURGER_RADIUS
 from mrs_nav.ros_processes import RosProcessError, process, read_clock, roscore, roslaunch_command
+from mrs_nav.sim import Simulator, SimulatorConfig
 from mrs_nav.stack.demo import Demo, DemoConfig
 from mrs_nav.tables import markdown_table
 
@@ -66,6 +68,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--time-budget", type=float, default=0.25, help="planner budget per plan, wall s")
     parser.add_argument(
         "--ros-runs", type=int, default=3, help="runs per world through the ROS stack in lockstep (0 = none)"
+    )
+    parser.add_argument(
+        "--accuracy-seeds", type=int, default=5, help="seeds of the office goals with headings (0 = none)"
+    )
+    parser.add_argument(
+        "--obstacle-seeds", type=int, default=10, help="seeds of the arena box put in the way (0 = none)"
+    )
+    parser.add_argument(
+        "--office-obstacle-seeds", type=int, default=3, help="seeds of the office corridor box (0 = none)"
     )
 
 
@@ -184,10 +195,9 @@ def _shortcut(points: FloatArray, grid: OccupancyGrid) -> FloatArray:
 
 
 def run(args: argparse.Namespace) -> str:
-    if args.seeds < 1:
-        raise InvalidInputError(f"--seeds must be >= 1, got {args.seeds}")
-    if args.ros_runs < 0:
-        raise InvalidInputError(f"--ros-runs must be >= 0, got {args.ros_runs}")
+    for option in ("seeds", "ros_runs", "accuracy_seeds", "obstacle_seeds", "office_obstacle_seeds"):
+        if getattr(args, option) < 0:
+            raise InvalidInputError(f"--{option.replace('_', '-')} must be >= 0, got {getattr(args, option)}")
     names = [n.strip() for n in args.worlds.split(",") if n.strip()]
     unknown = [n for n in names if n not in SCENARIOS]
     if unknown or not names:
@@ -206,7 +216,7 @@ def run(args: argparse.Namespace) -> str:
         "SLAM ATE median (m)",
         "real-time factor median",
     ]
-    rows = []
+    rows: list[list[object]] = []
     bar = tqdm(total=args.seeds * len(names), unit="run", file=sys.stderr, disable=not sys.stderr.isatty())
     for name in names:
         scenario = SCENARIOS[name]
@@ -247,18 +257,197 @@ def run(args: argparse.Namespace) -> str:
             ]
         )
     bar.close()
-    return (
-        "Whole stack in one process (`mrs_nav.stack.demo`): ODE simulator at 100 Hz with the 5 Hz laser, SLAM, RRT* "
-        f"({args.time_budget} s per plan) through unknown space, path follower at 10 Hz; no map at the start. "
-        "Success = navigator reports the goal reached, true pose within 0.2 m, no contact. "
-        "Final error and ATE use the true pose (ATE: SLAM pose against ground truth in the shared map/world "
-        "frame, no alignment). Path ratio: true distance travelled plus the straight rest to the goal, over the "
-        "shortest collision-free path. Real-time factor: sim time / wall time of the whole run, measured while "
-        "other jobs shared the two cores.\n\n"
-        + markdown_table(header, rows)
-        + ("\n\n" + ros_section(names, args.ros_runs) if args.ros_runs else "")
+    goals = []
+    if args.accuracy_seeds:
+        goals.append(goal_accuracy_section(args.accuracy_seeds, args.time_budget))
+    if args.obstacle_seeds or args.office_obstacle_seeds:
+        goals.append(obstacle_section(args.obstacle_seeds, args.office_obstacle_seeds, args.time_budget))
+    stack = (
+        ""
+        if not args.seeds
+        else (
+            "Whole stack in one process (`mrs_nav.stack.demo`): ODE simulator at 100 Hz with the 5 Hz laser, SLAM, "
+            f"RRT* ({args.time_budget} s per plan) through unknown space, path follower at 10 Hz; no map at the start. "
+            "Success = navigator reports the goal reached, true pose within 0.2 m, no contact. "
+            "Final error and ATE use the true pose (ATE: SLAM pose against ground truth in the shared map/world "
+            "frame, no alignment). Path ratio: true distance travelled plus the straight rest to the goal, over the "
+            "shortest collision-free path. Real-time factor: sim time / wall time of the whole run, measured while "
+            "other jobs shared the two cores.\n\n" + markdown_table(header, rows)
+        )
     )
+    ros = ros_section(names, args.ros_runs) if args.ros_runs else ""
+    return "\n\n".join(part for part in (stack, *goals, ros) if part)
 
 
 def _median(values: list[float]) -> float:
     return float(statistics.median(values)) if values else math.nan
+
+
+# -- goals as move_base users mean them, and a box the map does not have (in-process, on the known map) ---------
+
+XY_TOLERANCE, YAW_TOLERANCE = 0.05, 0.17  # m, rad: the navigator's defaults (TurtleBot3's move_base values)
+# Office goals with headings, visited in turn from the start (-5, -5, 0) in the south-west corridor corner.
+ACCURACY_GOALS = ((-3.0, -5.0, math.pi / 2), (-5.0, -3.0, math.pi), (-4.6, -4.6, -math.pi / 4), (-5.0, -5.0, 0.0))
+
+
+@dataclass(frozen=True)
+class BoxCase:
+    """A box put in the way after the map was made, and the trip whose direct route it blocks."""
+
+    world: str
+    box: Box
+    start: Pose2D
+    goal: tuple[float, float, float]
+    detour: str
+
+
+BOX_CASES = {
+    # from the south wall to the cylinder: round the north of the cylinder instead (about 7 m)
+    "arena": BoxCase(
+        "simple.world",
+        Box("south_block", 0.0, -1.0, 0.25, 0.0, 0.2, 2.0, 0.5),
+        Pose2D(-1.5, -1.5, 0.0),
+        (1.5, -1.5, 0.0),
+        "north of the cylinder",
+    ),
+    # across the south corridor (wall faces at y = -5.925 and -4.075): round the ring corridor (about 35 m)
+    "office": BoxCase(
+        "office.world",
+        Box("corridor_block", -2.0, -5.0, 0.25, 0.0, 0.2, 1.85, 0.5),
+        Pose2D(-5.0, -5.0, 0.0),
+        (0.0, -5.0, 0.0),
+        "round the ring corridor",
+    ),
+}
+
+
+@dataclass(frozen=True)
+class PoseOutcome:
+    """One goal of :func:`known_map_run`: how it ended, the true position and heading errors, sim time taken."""
+
+    state: str
+    distance_m: float
+    heading_rad: float
+    time_s: float
+
+
+def known_map_run(
+    world: World,
+    start: Pose2D,
+    goals: tuple[tuple[float, float, float], ...],
+    *,
+    seed: int,
+    time_budget: float,
+    box: Box | None = None,
+    goal_timeout_s: float = 400.0,
+) -> tuple[list[PoseOutcome], int]:
+    """Drive the core simulator to each goal pose in turn with the navigator on the world's own map (made before
+    ``box``, if any, was put in the world), fed every laser scan; the pose is the true one (perfect localisation:
+    this measures planning, following and the goal approach). The outcomes and the number of contacts."""
+    grid = rasterize_world(world, 0.05, margin=0.2)
+    sim = Simulator(world, SimulatorConfig(seed=seed), start)
+    if box is not None:
+        sim.add_box(box)
+    navigator = Navigator(rrt_planner("rrt_star", time_budget), NavigatorConfig(), seed=seed)
+    navigator.set_map(grid, 0.0)
+    laser = sim.config.laser
+    mount, angles = Pose2D(laser.mount_x, laser.mount_y, 0.0), laser.angles()
+    steps = round(sim.config.physics_rate / 10.0)  # a 10 Hz controller
+    outcomes = []
+    for x, y, yaw in goals:
+        t0 = sim.time
+        navigator.set_goal(x, y, t0, yaw)
+        while navigator.state is GoalState.ACTIVE and sim.time - t0 < goal_timeout_s:
+            command = navigator.update(sim.ground_truth(), sim.time)
+            sim.set_command(command.u, command.omega)
+            for _ in range(steps):
+                scan = sim.step()
+                if scan is not None:
+                    scanner = sim.ground_truth().compose(mount)
+                    navigator.set_scan(*beam_ends(scanner, angles, scan.ranges, laser.range_min, laser.range_max))
+        if navigator.state is GoalState.ACTIVE:
+            navigator.cancel()
+        state = {GoalState.REACHED: "reached", GoalState.FAILED: "failed"}.get(navigator.state, "timed out")
+        elapsed = sim.time - t0
+        sim.set_command(0.0, 0.0)
+        sim.run(1.0)  # come to rest before the errors are measured
+        truth = sim.ground_truth()
+        error = abs(wrap_angle(yaw - truth.yaw))
+        outcomes.append(PoseOutcome(state, math.hypot(x - truth.x, y - truth.y), error, elapsed))
+    return outcomes, sim.contacts.events
+
+
+def goal_accuracy_section(seeds: int, time_budget: float) -> str:
+    """Office goals with headings over ``seeds`` seeds: success and the true errors against the tolerances."""
+    world = load_world(WORLDS_DIR / "office.world")
+    results = [
+        known_map_run(world, Pose2D(-5.0, -5.0, 0.0), ACCURACY_GOALS, seed=seed, time_budget=time_budget)
+        for seed in range(seeds)
+    ]
+    outcomes = [o for runs, _ in results for o in runs]
+    within = sum(
+        o.state == "reached" and o.distance_m <= XY_TOLERANCE and o.heading_rad <= YAW_TOLERANCE for o in outcomes
+    )
+    distances = [o.distance_m for o in outcomes]
+    headings = [o.heading_rad for o in outcomes]
+    header = [
+        "goals",
+        "reached within both tolerances",
+        "contacts",
+        "position error median / max (m)",
+        "heading error median / max (rad)",
+        "time per goal median (sim s)",
+    ]
+    row = [
+        f"{len(outcomes)} ({seeds} seeds x {len(ACCURACY_GOALS)} office goals)",
+        f"{within}/{len(outcomes)}",
+        sum(contacts for _, contacts in results),
+        f"{_median(distances):.3f} / {max(distances):.3f}",
+        f"{_median(headings):.3f} / {max(headings):.3f}",
+        _median([o.time_s for o in outcomes]),
+    ]
+    return (
+        "Goal accuracy (`known_map_run`): the core simulator and navigator on the office's own map, true pose "
+        f"(perfect localisation), goals with headings {[(x, y, round(t, 2)) for x, y, t in ACCURACY_GOALS]} in turn "
+        f"from (-5, -5, 0); tolerances {XY_TOLERANCE} m and {YAW_TOLERANCE} rad; errors of the true pose 1 s "
+        "after the goal ended.\n\n" + markdown_table(header, [row])
+    )
+
+
+def obstacle_section(seeds: int, office_seeds: int, time_budget: float) -> str:
+    """Each :data:`BOX_CASES` over seeds (the office's long detour over ``office_seeds``): success without
+    contact and time to the goal."""
+    header = ["case", "seeds", "reached without contact", "contacts", "time to goal median (sim s)", "failures"]
+    rows = []
+    for name, case in BOX_CASES.items():
+        runs = seeds if name != "office" else office_seeds
+        world = load_world(WORLDS_DIR / case.world)
+        ok, contacts, times, failures = 0, 0, [], set()
+        for seed in range(runs):
+            (outcome,), touched = known_map_run(
+                world, case.start, (case.goal,), seed=seed, time_budget=time_budget, box=case.box
+            )
+            contacts += touched
+            if outcome.state == "reached" and touched == 0:
+                ok += 1
+                times.append(outcome.time_s)
+            else:
+                failures.add(outcome.state)
+        box = case.box
+        rows.append(
+            [
+                f"{name}: {box.size_x:g} x {box.size_y:g} m box at ({box.x:g}, {box.y:g}); "
+                f"({case.start.x:g}, {case.start.y:g}) -> {case.goal[:2]} {case.detour}",
+                runs,
+                f"{ok}/{runs}",
+                contacts,
+                _median(times),
+                ", ".join(sorted(failures)) or "-",
+            ]
+        )
+    return (
+        "A box the map does not have (`known_map_run`, same set-up as above, RRT* "
+        f"{time_budget} s per plan): put in the world after the map was made, across the direct route. The laser "
+        "marks it, the blocked path is replanned. Target: >= 9 of 10 seeds reach the goal behind it without "
+        "contact.\n\n" + markdown_table(header, rows)
+    )

@@ -13,6 +13,10 @@ import re
 from pathlib import Path
 
 from mrs_nav.resources import CHECKOUT
+from mrs_nav.tables import markdown_table
+
+# markdown_table lives in mrs_nav.tables (batch replays use it too); benchmarks may take it from here.
+__all__ = ["default_results_path", "machine_description", "markdown_table", "write_section"]
 
 _HEADER = (
     "# mrs_nav benchmark results\n\n"

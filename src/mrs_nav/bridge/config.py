@@ -4,7 +4,10 @@ allow-list, validated once into frozen dataclasses.
 The same mapping comes from ROS private parameters or from a YAML file (``config/zenoh_bridge.yaml``
 documents every key). Defaults: peer mode listening on ``tcp/127.0.0.1:7447``, multicast scouting off
 (always: the bridge only talks to endpoints it is given), prefix ``mrs_nav``, every topic out except
-``/rosout*`` and ``/clock``, no rate limit, and nothing inbound.
+``/rosout*`` and ``/clock``, no rate limit, nothing inbound, and the bridge's access control on (remote
+sessions may only put on allow-listed inbound keys).
+TLS, authentication and the rest of Zenoh's transport settings come from a Zenoh JSON5 file
+(``zenoh_config``), passed through.
 """
 
 from __future__ import annotations
@@ -15,12 +18,17 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from mrs_nav.bridge.acl import access_control
 from mrs_nav.bridge.keys import KeyLayout, check_topic, check_type, robot_prefix
 from mrs_nav.errors import InvalidInputError
 
 MODES = ("peer", "client", "router")
 DEFAULT_LISTEN = ("tcp/127.0.0.1:7447",)
 DEFAULT_DENY = (r"/rosout(_agg)?", r"/clock")
+# An inbound message may be this big (a PoseStamped with a 256-character frame is 332 bytes) and arrive this
+# often per topic (a person clicking goals) unless its rule says otherwise.
+DEFAULT_INBOUND_BYTES = 1024
+DEFAULT_INBOUND_RATE = 2.0
 _ENDPOINT = re.compile(r"^(tcp|udp|tls|quic|ws|unixsock-stream)/\S+$")
 
 
@@ -59,10 +67,16 @@ class InboundRule:
     topic: str
     type: str
     frame: str = ""
+    max_bytes: int = DEFAULT_INBOUND_BYTES
+    max_rate: float = DEFAULT_INBOUND_RATE
 
     def __post_init__(self) -> None:
         check_topic(self.topic)
         check_type(self.type)
+        if self.max_bytes <= 0:
+            raise InvalidInputError(f"inbound {self.topic} max_bytes {self.max_bytes!r}: expected bytes > 0")
+        if not math.isfinite(self.max_rate) or self.max_rate <= 0:
+            raise InvalidInputError(f"inbound {self.topic} max_rate {self.max_rate!r}: expected a rate > 0 Hz")
 
 
 @dataclass(frozen=True)
@@ -72,7 +86,10 @@ class BridgeConfig:
     ``max_rates`` maps a topic regex to its maximum outbound rate in Hz (first full match wins; unmatched
     topics get ``default_max_rate``; 0 = unlimited). ``discovery_period`` (s) is how often the master is
     asked for new topics. ``retry_period`` (s) bounds how long a lost Zenoh connection waits before the
-    next reconnection attempt.
+    next reconnection attempt. ``zenoh_config`` names a Zenoh JSON5 file (TLS, authentication, ...) whose
+    settings the bridge's own (mode, endpoints, scouting) are laid over; ``acl`` adds the bridge's access
+    control (:mod:`mrs_nav.bridge.acl`), ``operators`` naming who may send inbound messages (Zenoh usernames
+    or certificate common names; empty: anyone who can connect).
     """
 
     mode: str = "peer"
@@ -87,6 +104,9 @@ class BridgeConfig:
     inbound: tuple[InboundRule, ...] = ()
     discovery_period: float = 1.0
     retry_period: float = 1.0
+    zenoh_config: str = ""
+    acl: bool = True
+    operators: tuple[str, ...] = ()
     _rates: tuple[tuple[re.Pattern[str], float], ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -97,7 +117,8 @@ class BridgeConfig:
                 raise InvalidInputError(f"endpoint {endpoint!r}: expected PROTO/ADDRESS, e.g. tcp/127.0.0.1:7447")
         if not self.listen and not self.connect:
             raise InvalidInputError("listen and connect are both empty: the bridge would reach nobody")
-        robot_prefix(self.prefix, self.namespace)
+        if not robot_prefix(self.prefix, self.namespace) and self.layout is KeyLayout.MRS_NAV:
+            raise InvalidInputError("prefix is empty: only the zenoh-bridge-ros1 layout works without one")
         for name, value in (("discovery_period", self.discovery_period), ("retry_period", self.retry_period)):
             if not math.isfinite(value) or value <= 0:
                 raise InvalidInputError(f"{name} {value!r}: expected a positive number of seconds")
@@ -126,30 +147,39 @@ class BridgeConfig:
         """The rule allowing ``topic`` in, or None when remote peers may not publish it."""
         return next((rule for rule in self.inbound if rule.topic == topic), None)
 
-    def zenoh_settings(self) -> dict[str, Any]:
-        """Zenoh configuration entries (path -> JSON value) for this bridge; see :func:`zenoh_settings`."""
-        return zenoh_settings(self.mode, self.listen, self.connect, self.retry_period)
+    def zenoh_settings(self, inbound_md5: Mapping[str, str]) -> dict[str, Any]:
+        """Zenoh configuration entries (path -> JSON value) for this bridge (see :func:`zenoh_settings`), with
+        its access control; ``inbound_md5`` maps inbound topics to their md5 sums."""
+        settings = zenoh_settings(self.mode, self.listen, self.connect, self.retry_period)
+        if self.acl:
+            inbound = [(rule.topic, rule.type, inbound_md5.get(rule.topic, "")) for rule in self.inbound]
+            settings["access_control"] = access_control(self.key_prefix, self.layout, inbound, self.operators)
+        return settings
 
     @classmethod
     def from_mapping(cls, params: Mapping[str, Any]) -> BridgeConfig:
         """Build from a parameter mapping (ROS ``~`` params or YAML); unknown keys are errors."""
         known = {
             "mode", "listen", "connect", "prefix", "namespace", "layout", "allow", "deny", "max_rates",
-            "default_max_rate", "inbound", "discovery_period", "retry_period",
+            "default_max_rate", "inbound", "discovery_period", "retry_period", "zenoh_config", "acl", "operators",
         }  # fmt: skip
         unknown = sorted(set(params) - known - {"config_file"})
         if unknown:
             raise InvalidInputError(f"unknown bridge parameter(s) {unknown}; known: {sorted(known)}")
         kwargs: dict[str, Any] = {}
-        for key in ("mode", "prefix", "namespace"):
+        for key in ("mode", "prefix", "namespace", "zenoh_config"):
             if key in params:
                 kwargs[key] = _text(params[key], key)
-        for key in ("listen", "connect"):
+        for key in ("listen", "connect", "operators"):
             if key in params:
                 kwargs[key] = _text_list(params[key], key)
         for key in ("default_max_rate", "discovery_period", "retry_period"):
             if key in params:
                 kwargs[key] = _number(params[key], key)
+        if "acl" in params:
+            if not isinstance(params["acl"], bool):
+                raise InvalidInputError(f"acl: expected true or false, got {params['acl']!r}")
+            kwargs["acl"] = params["acl"]
         if "layout" in params:
             try:
                 kwargs["layout"] = KeyLayout(params["layout"])
@@ -212,6 +242,12 @@ def _number(value: Any, what: str) -> float:
     return float(value)
 
 
+def _integer(value: Any, what: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise InvalidInputError(f"{what}: expected a whole number, got {value!r}")
+    return value
+
+
 def _rule(item: Any) -> InboundRule:
     if isinstance(item, str):
         item = {"topic": item}
@@ -222,7 +258,18 @@ def _rule(item: Any) -> InboundRule:
     type_name = _text(item.get("type", default_type[0]), f"inbound {topic} type")
     if not type_name:
         raise InvalidInputError(f"inbound {topic}: name its message type (type: pkg/Type)")
-    return InboundRule(topic, type_name, _text(item.get("frame", default_type[1]), f"inbound {topic} frame"))
+    unknown = sorted(set(item) - {"topic", "type", "frame", "max_bytes", "max_rate"})
+    if unknown:
+        raise InvalidInputError(
+            f"inbound {topic}: unknown key(s) {unknown}; known: topic, type, frame, max_bytes, max_rate"
+        )
+    return InboundRule(
+        topic,
+        type_name,
+        _text(item.get("frame", default_type[1]), f"inbound {topic} frame"),
+        _integer(item.get("max_bytes", DEFAULT_INBOUND_BYTES), f"inbound {topic} max_bytes"),
+        _number(item.get("max_rate", DEFAULT_INBOUND_RATE), f"inbound {topic} max_rate"),
+    )
 
 
 # Topics whose type and frame are fixed by DESIGN.md, so that ``inbound: [/move_base_simple/goal]`` suffices.

@@ -4,6 +4,7 @@ rates and latencies, as a dict (for ``--json``) and as text for a terminal."""
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Mapping
 from typing import Any
 
@@ -36,8 +37,12 @@ def path_length(points: npt.NDArray[np.float64]) -> float:
     return float(np.sum(np.hypot(*np.diff(points, axis=0).T))) if len(points) > 1 else 0.0
 
 
-def summarise(messages: Mapping[str, Any], stats: Mapping[str, TopicStats], now: float) -> dict[str, Any]:
-    """The dashboard as plain data; ``messages`` maps topics to their last decoded message."""
+def summarise(
+    messages: Mapping[str, Any], stats: Mapping[str, TopicStats], now: float, now_ns: int | None = None
+) -> dict[str, Any]:
+    """The dashboard as plain data; ``messages`` maps topics to their last decoded message, ``now`` is the
+    monotonic time (s) and ``now_ns`` the wall clock (ns since the epoch, default: now)."""
+    wall_ns = time.time_ns() if now_ns is None else now_ns
     out: dict[str, Any] = {"pose": None, "speed": None, "goal": None, "path_length": None, "map": None}
     odom = messages.get(ODOM_TOPIC)
     if odom is not None:
@@ -66,6 +71,8 @@ def summarise(messages: Mapping[str, Any], stats: Mapping[str, TopicStats], now:
             "rate_hz": s.rate_hz(now),
             "latency_ms_p50": s.latency_ms(50),
             "latency_ms_p99": s.latency_ms(99),
+            "age_s": None if math.isnan(s.age_s(wall_ns)) else s.age_s(wall_ns),
+            "stale": s.stale(now, wall_ns),
         }
         for topic, s in stats.items()
     }
@@ -100,10 +107,13 @@ def render(summary: Mapping[str, Any], title: str = "") -> str:
         )
     )
     lines.append("")
-    lines.append(f"{'topic':<28} {'type':<28} {'count':>7} {'rate Hz':>8} {'lat p50 ms':>11} {'p99 ms':>8}")
+    lines.append(
+        f"{'topic':<28} {'type':<28} {'count':>7} {'rate Hz':>8} {'lat p50 ms':>11} {'p99 ms':>8} {'age s':>8}  state"
+    )
     for topic, t in summary["topics"].items():
         lines.append(
             f"{topic:<28} {t['type']:<28} {t['count']:>7} {_fmt(t['rate_hz'], '', 1):>8} "
-            f"{_fmt(t['latency_ms_p50'], '', 2):>11} {_fmt(t['latency_ms_p99'], '', 2):>8}"
+            f"{_fmt(t['latency_ms_p50'], '', 2):>11} {_fmt(t['latency_ms_p99'], '', 2):>8} "
+            f"{_fmt(t['age_s'], '', 1):>8}  {'STALE' if t['stale'] else 'live'}"
         )
     return "\n".join(lines)

@@ -5,13 +5,17 @@ prefix is ``mrs_nav`` joined with the robot's namespace (``mrs_nav/robot1``). Br
 chunks starting with ``@``, which Zenoh's ``**`` never matches, so ``P/**`` selects data only:
 
 - ``P/@types/<pkg>/<Type>``: queryable answering the message definition (JSON, see :mod:`.wire`),
+- ``P/@bridge/status``: queryable answering what the bridge bridges (see :mod:`.wire`),
 - ``P/@bridge/publish/<topic>``: queryable through which a remote peer asks to publish into ROS (answered
   with an ok or an error reply naming why it was refused),
 - liveliness tokens on each data key ``P/<topic>`` announce the bridged topics.
 
-Layout ``zenoh-bridge-ros1`` reproduces the data keys of eclipse-zenoh's ROS 1 bridge,
-``<hex(type)>/<md5>/<topic>`` (with the prefix inserted as its bridge namespace before the topic when not
-empty), so its users can subscribe unchanged; the ``@`` services stay under the prefix.
+Layout ``zenoh-bridge-ros1`` reproduces the data keys of eclipse-zenoh's ROS 1 bridge as released in
+zenoh-plugin-ros1 1.0.0-rc.1, ``<hex(type)>/<md5>/<topic>`` with an empty prefix (a non-empty one is
+inserted before the topic), and its discovery beacons
+``ros1_discovery_info/*/pub/<hex(type)>/<md5>/*/<topic>`` (:func:`discovery_key`), so a zenoh-bridge-ros1 on
+another master finds and subscribes to our topics. The ``@`` services stay under the prefix, or under
+``mrs_nav`` when the prefix is empty.
 """
 
 from __future__ import annotations
@@ -50,11 +54,12 @@ def check_type(type_name: str) -> str:
 
 
 def robot_prefix(prefix: str, namespace: str = "") -> str:
-    """The key prefix of one robot: ``prefix`` then the namespace's chunks (``mrs_nav`` + ``/r1`` -> ``mrs_nav/r1``)."""
+    """The key prefix of one robot: ``prefix`` then the namespace's chunks (``mrs_nav`` + ``/r1`` -> ``mrs_nav/r1``);
+    may be empty (zenoh-bridge-ros1's layout has none)."""
     prefix = prefix.strip("/")
     ns = namespace.strip("/")
     full = f"{prefix}/{ns}" if prefix and ns else prefix or ns
-    if not _PREFIX.match(full):
+    if full and not _PREFIX.match(full):
         raise InvalidInputError(f"key prefix {full!r}: expected chunks of letters, digits, '_', '-', '.'")
     return full
 
@@ -68,6 +73,31 @@ def topic_key(
         return f"{prefix}/{chunk}"
     head = f"{check_type(type_name).encode().hex()}/{md5}"
     return f"{head}/{prefix}/{chunk}" if prefix else f"{head}/{chunk}"
+
+
+def data_pattern(prefix: str, layout: KeyLayout) -> str:
+    """Key expression matching every data key of the bridge."""
+    if layout is KeyLayout.MRS_NAV:
+        return f"{prefix}/**"
+    return f"*/*/{prefix}/**" if prefix else "*/*/**"
+
+
+def services_pattern(prefix: str) -> str:
+    """Where the ``@types`` and ``@bridge`` services live: the prefix, or ``mrs_nav`` when it is empty."""
+    return prefix or "mrs_nav"
+
+
+DISCOVERY_ROOT = "ros1_discovery_info"
+
+
+def discovery_key(topic: str, type_name: str, md5: str) -> str:
+    """zenoh-bridge-ros1's announcement that a ROS publisher of ``topic`` is bridged (discovery and bridge
+    namespaces ``*``, as its releases use)."""
+    return f"{DISCOVERY_ROOT}/*/pub/{check_type(type_name).encode().hex()}/{md5}/*/{check_topic(topic).strip('/')}"
+
+
+def discovery_pattern() -> str:
+    return f"{DISCOVERY_ROOT}/**"
 
 
 def topic_of_key(prefix: str, key: str) -> str:
@@ -87,6 +117,11 @@ def types_key(prefix: str, type_name: str) -> str:
 def publish_key(prefix: str, topic: str) -> str:
     """Key of the queryable through which a remote peer publishes ``topic`` into ROS."""
     return f"{prefix}/@bridge/publish/{check_topic(topic).strip('/')}"
+
+
+def status_key(prefix: str) -> str:
+    """Key of the queryable answering the bridge's status (JSON, see :mod:`.wire`)."""
+    return f"{services_pattern(prefix)}/@bridge/status"
 
 
 def topic_of_publish_key(prefix: str, key: str) -> str:

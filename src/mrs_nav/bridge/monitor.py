@@ -17,9 +17,9 @@ import zenoh
 import zenoh.ext
 
 from mrs_nav.bridge.decoder import MessageDecoder, noetic_store
-from mrs_nav.bridge.keys import publish_key, topic_of_key, types_key
+from mrs_nav.bridge.keys import publish_key, status_key, topic_of_key, types_key
 from mrs_nav.bridge.session import open_client_session
-from mrs_nav.bridge.wire import decode_attachment, decode_definition, encoding_text, schema_of
+from mrs_nav.bridge.wire import decode_attachment, decode_definition, decode_status, encoding_text, schema_of
 from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.geometry import quaternion_from_yaw
 
@@ -31,13 +31,29 @@ _WINDOW = 100
 
 @dataclass
 class TopicStats:
-    """Arrivals of one topic: count, recent arrival times (s, monotonic) and latencies (ms)."""
+    """Arrivals of one topic: count, recent arrival times (s, monotonic), latencies (ms), whether a live ROS
+    publisher stands behind it (the bridge's liveliness token) and when the bridge received the last message
+    (ns since the epoch, from its attachment: a late joiner's cached sample keeps its true age)."""
 
     type: str = ""
     count: int = 0
     arrivals: deque[float] = field(default_factory=lambda: deque(maxlen=_WINDOW))
     latencies_ms: deque[float] = field(default_factory=lambda: deque(maxlen=_WINDOW))
     payload: bytes = b""
+    alive: bool = False
+    received_ns: int = 0
+
+    def age_s(self, now_ns: int) -> float:
+        """Seconds since the bridge received the last message (NaN when none carried a receive time)."""
+        return (now_ns - self.received_ns) / 1e9 if self.received_ns else math.nan
+
+    def stale(self, now: float, now_ns: int) -> bool:
+        """No live ROS publisher any more, or silent for 3 of its own periods (a topic that has only sent one
+        message, a latched map, is judged by its publisher alone)."""
+        if not self.alive:
+            return True
+        rate = self.rate_hz(self.arrivals[-1]) if self.arrivals else 0.0
+        return rate > 0 and self.age_s(now_ns) > 3.0 / rate
 
     def rate_hz(self, now: float) -> float:
         """Mean rate over the recent arrivals; 0 once the topic has been silent for 3 of its periods."""
@@ -54,10 +70,19 @@ class TopicStats:
 class RemoteMonitor:
     """Watches the bridge whose keys start with ``prefix`` through the endpoints in ``connect``."""
 
-    def __init__(self, connect: list[str], prefix: str = "mrs_nav", timeout: float = 2.0) -> None:
+    def __init__(
+        self,
+        connect: list[str],
+        prefix: str = "mrs_nav",
+        timeout: float = 2.0,
+        mode: str = "peer",
+        config_file: str = "",
+    ) -> None:
         self.connect = connect
         self.prefix = prefix.strip("/")
         self.timeout = timeout
+        self.mode = mode
+        self.config_file = config_file
         self.decoder = MessageDecoder()
         self._lock = threading.Lock()
         self._stats: dict[str, TopicStats] = {}
@@ -66,7 +91,7 @@ class RemoteMonitor:
         self._entities: list[Any] = []
 
     def open(self) -> RemoteMonitor:
-        session = open_client_session(self.connect)
+        session = open_client_session(self.connect, self.mode, self.config_file)
         self._session = session
         pattern = f"{self.prefix}/**"
         self._entities = [
@@ -107,25 +132,48 @@ class RemoteMonitor:
             topic = topic_of_key(self.prefix, str(sample.key_expr))
         except MrsNavError:
             return
-        latency = math.nan
+        received_ns = 0
         if sample.attachment is not None:
             with contextlib.suppress(MrsNavError):  # a foreign publisher's attachment: no latency, still count it
-                latency = (now_ns - decode_attachment(sample.attachment.to_bytes()).receive_time_ns) / 1e6
+                received_ns = decode_attachment(sample.attachment.to_bytes()).receive_time_ns
         with self._lock:
             stats = self._stats.setdefault(topic, TopicStats())
             stats.type = schema_of(str(sample.encoding))
             stats.count += 1
             stats.arrivals.append(time.monotonic())
-            if math.isfinite(latency):
-                stats.latencies_ms.append(latency)
+            # The first sample may be a late joiner's cached one, old by design: its age is news, not latency.
+            if received_ns and stats.count > 1:
+                stats.latencies_ms.append((now_ns - received_ns) / 1e6)
+            stats.received_ns = received_ns
             stats.payload = sample.payload.to_bytes()
 
     # --- queries --------------------------------------------------------------------------------------------
     def topics(self) -> dict[str, TopicStats]:
         """Topics announced by liveliness tokens or seen in samples, with their statistics."""
         with self._lock:
-            names = self._alive | set(self._stats)
-            return {t: self._stats.get(t, TopicStats()) for t in sorted(names)}
+            for topic in self._alive - set(self._stats):
+                self._stats[topic] = TopicStats()
+            for topic, stats in self._stats.items():
+                stats.alive = topic in self._alive
+            return dict(sorted(self._stats.items()))
+
+    def status(self) -> dict[str, Any]:
+        """The bridge's own report (:func:`mrs_nav.bridge.wire.decode_status`); InvalidInputError when no bridge
+        answers within the timeout, so that a monitor pointed at the wrong place says so."""
+        session = self._require_session()
+        deadline = time.monotonic() + self.timeout
+        # A peer learns the bridge's queryable some milliseconds after it connects, and a query nobody is known
+        # to answer ends at once: ask again until the timeout.
+        while True:
+            remaining = deadline - time.monotonic()
+            for reply in session.get(status_key(self.prefix), timeout=max(0.05, remaining)):
+                if reply.ok is not None:
+                    return decode_status(reply.ok.payload.to_bytes())
+            if remaining <= 0:
+                break
+            time.sleep(0.05)
+        where = ", ".join(self.connect)
+        raise InvalidInputError(f"no bridge under prefix {self.prefix!r} answered on {where} within {self.timeout:g} s")
 
     def latest(self, topic: str) -> Any:
         """The last message of ``topic`` decoded with its fetched definition, or None if none arrived."""
@@ -163,7 +211,11 @@ class RemoteMonitor:
                 return True, reply.ok.payload.to_string()
             if reply.err is not None:
                 return False, reply.err.payload.to_string()
-        return False, f"no bridge under {self.prefix!r} answered on {', '.join(self.connect)}"
+        # The bridge's access control drops queries it would refuse anyway, so silence is the refusal.
+        return False, (
+            f"no bridge under {self.prefix!r} on {', '.join(self.connect)} took the goal: {GOAL_TOPIC} is not in "
+            "its inbound allow-list, its access control does not let this session send it, or no bridge is there"
+        )
 
     def _require_session(self) -> zenoh.Session:
         if self._session is None:

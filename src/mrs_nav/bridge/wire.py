@@ -7,6 +7,9 @@
   (wall clock), from which a subscriber on a synchronised clock derives the latency.
 - Type definitions (``P/@types/pkg/Type`` replies): UTF-8 JSON ``{"type", "md5", "definition"}``, the
   definition being the full text of ROS 1's ``message_definition`` (dependencies after ``MSG:`` lines).
+- Status (``P/@bridge/status`` replies): UTF-8 JSON ``{"topics": {topic: {"type", "forwarded", "limited",
+  "age_s"}}, "inbound": {topic: {"accepted", "dropped"}}, "refused": n}``; ``age_s`` is the time since the last
+  message of the topic reached the bridge (null before the first one).
 """
 
 from __future__ import annotations
@@ -14,6 +17,7 @@ from __future__ import annotations
 import json
 import struct
 from dataclasses import dataclass
+from typing import Any
 
 from mrs_nav.errors import InvalidInputError
 
@@ -87,3 +91,19 @@ def decode_definition(data: bytes) -> tuple[str, str, str]:
     except (ValueError, TypeError, KeyError) as err:
         raise InvalidInputError(f"type definition reply is malformed: {err}") from None
     return result
+
+
+def encode_status(status: dict[str, Any]) -> bytes:
+    """The JSON reply of a status query."""
+    return json.dumps(status).encode()
+
+
+def decode_status(data: bytes) -> dict[str, Any]:
+    """The bridge's status from a status reply; raise InvalidInputError if malformed."""
+    try:
+        status = json.loads(data)
+    except ValueError as err:
+        raise InvalidInputError(f"bridge status reply is malformed: {err}") from None
+    if not isinstance(status, dict) or not isinstance(status.get("topics"), dict):
+        raise InvalidInputError("bridge status reply is malformed: no topics")
+    return status

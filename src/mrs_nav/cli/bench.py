@@ -24,6 +24,7 @@ BENCHMARKS = {
     "replay-batch": "replay_batch",
     "bridge": "bridge",
     "soak": "soak",
+    "localisation": "localisation",
 }
 
 

@@ -11,6 +11,7 @@ from tqdm import tqdm
 
 from mrs_nav.bag.from_carmen import carmen_to_bag
 from mrs_nav.cli.common import print_json
+from mrs_nav.errors import InvalidInputError
 from mrs_nav.motion_model import DEFAULT_ALPHAS, OdometryNoise
 from mrs_nav.options import parse_floats
 
@@ -23,15 +24,23 @@ def register(subparsers: Any) -> None:
         help="convert a CARMEN log to a ROS bag (/scan, /odom, /tf, /ground_truth/odom)",
         description=(
             "Convert the FLASER lines of a CARMEN log (plain or .gz) to a ROS 1 bag: sensor_msgs/LaserScan on "
-            "/scan (the log's beam geometry, frame base_scan), the logged (corrected) poses on "
-            "/ground_truth/odom, and odometry on /odom plus tf odom->base_footprint made from the ground-truth "
-            "increments with the noise of the odometry motion model (Thrun et al., Probabilistic Robotics, "
-            "table 5.6), seeded."
+            "/scan (CARMEN's beam angles, frame base_scan), the logged (corrected) poses on /ground_truth/odom, "
+            "and odometry on /odom plus tf odom->base_footprint: by default the robot's real odometry from the "
+            "log's ODOM lines; with --odom synthetic, the logged poses' increments with the noise of the "
+            "odometry motion model (Thrun et al., Probabilistic Robotics, table 5.6), seeded. Scans stamped at or "
+            "before their predecessor are restamped (previous + the log's median interval) with a NOTE. A bad "
+            "line is one ERROR naming file:line."
         ),
     )
     parser.add_argument("log", type=Path, help="CARMEN log file (.log or .log.gz)")
     parser.add_argument("bag", type=Path, help="bag file to write (replaced if it exists)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the odometry noise (default: 0)")
+    parser.add_argument(
+        "--odom",
+        choices=("log", "synthetic"),
+        default="log",
+        help="odometry: the log's ODOM lines (default) or synthetic noise on the logged poses",
+    )
+    parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic odometry noise (default: 0)")
     parser.add_argument(
         "--odom-noise",
         default=_DEFAULT_NOISE,
@@ -39,7 +48,7 @@ def register(subparsers: Any) -> None:
         help=(
             "odometry motion model alphas, as variances: var(rot) = a1*rot^2 + a2*trans^2, "
             "var(trans) = a3*trans^2 + a4*(rot1^2 + rot2^2); units rad^2/rad^2, rad^2/m^2, m^2/m^2, m^2/rad^2 "
-            f"(default: {_DEFAULT_NOISE}; 0,0,0,0 gives perfect odometry)"
+            f"(with --odom synthetic; default: {_DEFAULT_NOISE}; 0,0,0,0 gives perfect odometry)"
         ),
     )
     parser.add_argument("--json", action="store_true", help="print a JSON summary")
@@ -48,18 +57,25 @@ def register(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     noise = OdometryNoise.of(parse_floats(args.odom_noise, 4, "--odom-noise"))
+    if args.odom == "log" and args.odom_noise != _DEFAULT_NOISE:
+        raise InvalidInputError("--odom-noise applies to --odom synthetic only")
     progress = None
     bar: Any = None
     if sys.stderr.isatty():
         bar = tqdm(desc="carmen2bag", unit="scan")
         progress = bar.update
     try:
-        summary = carmen_to_bag(args.log, args.bag, noise, args.seed, progress=progress)
+        summary = carmen_to_bag(
+            args.log, args.bag, noise if args.odom == "synthetic" else None, args.seed, progress=progress
+        )
     finally:
         if bar is not None:
             bar.close()
+    for note in summary.notes:
+        print(f"NOTE: {note}", file=sys.stderr)
     if args.json:
-        print_json({"scans": summary.scans, "duration_s": summary.duration_s, "bag": str(args.bag)})
+        payload = {"scans": summary.scans, "duration_s": summary.duration_s, "odometry": summary.odometry}
+        print_json({**payload, "bag": str(args.bag)})
     else:
         print(f"wrote {summary.scans} scans ({summary.duration_s:.0f} s of log) to {args.bag}")
     return 0

@@ -5,6 +5,10 @@ typed function returning the exit code. Domain errors (:class:`MrsNavError`), us
 cannot be written become one ``ERROR:`` line and exit 1; exit 2 means only "ran but did not reach the goal";
 anything else is a bug and keeps its traceback. SIGTERM and SIGHUP unwind like Ctrl-C, so temporary folders
 are removed and partial outputs closed when the command is killed (SIGKILL cannot be caught).
+
+Only the module of the command being run is imported, so that ``mrs-nav monitor`` works in a monitor-only
+install (``pip install "mrs_nav[monitor]"``: no ROS, ODE, scipy or yaml); there the other commands are listed
+as unavailable and say which module they miss.
 """
 
 from __future__ import annotations
@@ -24,15 +28,23 @@ from mrs_nav.errors import MrsNavError
 SUBCOMMANDS = ("demo", "figures", "plan", "replay", "carmen2bag", "bench", "monitor")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(commands: Sequence[str] = SUBCOMMANDS) -> argparse.ArgumentParser:
     parser = Parser(
         prog="mrs-nav",
         description="mrs_nav offline tools: simulate, plan, replay bags, benchmark and monitor; no ROS master needed.",
     )
     parser.add_argument("--version", action="version", version=f"mrs-nav {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name in SUBCOMMANDS:
-        importlib.import_module(f"mrs_nav.cli.{name}").register(subparsers)
+    for name in commands:
+        try:
+            module = importlib.import_module(f"mrs_nav.cli.{name}")
+        except ModuleNotFoundError as err:
+            missing = f"mrs-nav {name} needs the Python module {err.name!r}, which is not installed"
+            sub = subparsers.add_parser(name, help=f"unavailable: needs {err.name}", add_help=False)
+            sub.add_argument("ignored", nargs=argparse.REMAINDER)
+            sub.set_defaults(handler=lambda _args, why=missing: fail(why))
+            continue
+        module.register(subparsers)
     return parser
 
 
@@ -41,7 +53,9 @@ def _interrupt(signum: int, _frame: FrameType | None) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    command = next((a for a in argv if not a.startswith("-")), None)
+    parser = build_parser((command,) if command in SUBCOMMANDS else SUBCOMMANDS)
     try:
         args = parser.parse_args(argv)
     except MrsNavError as err:

@@ -1,7 +1,8 @@
 """``mrs-nav monitor``: watch a robot through the Zenoh bridge, with no ROS installed.
 
-Needs only eclipse-zenoh and rosbags: topics are discovered through the bridge's liveliness tokens, their
-definitions fetched from its ``@types`` queryable and the messages decoded with rosbags.
+Needs only eclipse-zenoh and rosbags (``pip install "mrs_nav[monitor]"``): topics are discovered through the
+bridge's liveliness tokens, their definitions fetched from its ``@types`` queryable and the messages decoded
+with rosbags.
 """
 
 from __future__ import annotations
@@ -35,6 +36,15 @@ def register(subparsers: Any) -> None:
         help="Zenoh endpoint of the bridge or a router, e.g. tcp/127.0.0.1:7447 (repeatable)",
     )
     parser.add_argument("--prefix", default="mrs_nav", help="key prefix of the robot (default: mrs_nav)")
+    parser.add_argument(
+        "--mode", choices=("peer", "client"), default="peer", help="Zenoh mode (client when the bridge is a router)"
+    )
+    parser.add_argument(
+        "--zenoh-config",
+        default="",
+        metavar="JSON5",
+        help="Zenoh configuration file: TLS certificates, user and password (endpoints and mode come from here)",
+    )
     parser.add_argument("--once", action="store_true", help="wait for data (see --duration), print once and exit")
     parser.add_argument(
         "--duration", type=float, default=None, metavar="S", help="run S seconds then exit (with --once: wait S s)"
@@ -56,7 +66,8 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidInputError(f"--duration {args.duration}: expected seconds >= 0")
     goal = parse_floats(args.send_goal, 3, "--send-goal") if args.send_goal else None
     connect = [e.strip() for item in args.connect for e in item.split(",") if e.strip()]
-    with RemoteMonitor(connect, args.prefix, timeout=args.timeout) as monitor:
+    with RemoteMonitor(connect, args.prefix, args.timeout, args.mode, args.zenoh_config) as monitor:
+        monitor.status()  # no bridge answering: one ERROR line, exit 1
         if goal is not None:
             accepted, answer = monitor.send_goal(goal[0], goal[1], goal[2], frame=args.frame)
             if not accepted:

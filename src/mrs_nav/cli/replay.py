@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 from pathlib import Path
@@ -27,6 +28,7 @@ from mrs_nav.replay.batch import (
 )
 from mrs_nav.replay.golden import dump_json, make_golden
 from mrs_nav.replay.session_replay import PlanOptions
+from mrs_nav.slam.relations import load_relations
 
 
 def add_options(parser: argparse.ArgumentParser) -> None:
@@ -92,6 +94,24 @@ def register(subparsers: Any) -> None:
         metavar="ADDRESS",
         help="replay several bags on this Dask distributed scheduler (e.g. tcp://127.0.0.1:8786) instead",
     )
+    parser.add_argument(
+        "--relations",
+        type=Path,
+        metavar="FILE",
+        help=(
+            "score the SLAM trajectory on a relations file (Kummerle et al. 2009: 't1 t2 x y z roll pitch yaw' a "
+            "line): mean and std of translational (m) and rotational (deg) relation error"
+        ),
+    )
+    parser.add_argument(
+        "--relations-offset",
+        type=float,
+        metavar="S",
+        help=(
+            "relation stamp minus bag stamp (s); default: found as the most common difference, to 1 ms, between "
+            "relation and scan stamps"
+        ),
+    )
     parser.add_argument("--json", action="store_true", help="print the metrics (or the report) as one JSON object")
     parser.set_defaults(handler=run)
 
@@ -132,6 +152,9 @@ def run(args: argparse.Namespace) -> int:
         return _run_batch(args)
     bag = args.bags[0]
     job = _job(args, bag, args.out, args.against)
+    relations = load_relations(args.relations) if args.relations else None
+    if args.relations_offset is not None and not math.isfinite(args.relations_offset):
+        return fail(f"--relations-offset must be finite, got {args.relations_offset}")
     check_writable(args.out, "--out", folder=True)
     if args.write_golden:
         check_writable(args.write_golden, "--write-golden")
@@ -141,12 +164,14 @@ def run(args: argparse.Namespace) -> int:
     finally:
         if bar is not None:
             bar.close()
-    if outcome.note:
-        print(f"NOTE: {outcome.note}", file=sys.stderr)
+    for note in outcome.notes:
+        print(f"NOTE: {note}", file=sys.stderr)
     if args.write_golden:
         record = make_golden(bag.name.removesuffix(".active"), _options(args), session.metrics)
         args.write_golden.write_text(dump_json(record), encoding="utf-8")
     summary = outcome.summary
+    if relations is not None:
+        summary.update(session.slam.relation_errors(relations, args.relations_offset))
     summary["map_yaml"] = str(args.out / "slam_map.yaml")
     summary["metrics"] = session.metrics
     if args.against is not None:
@@ -163,8 +188,11 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run_batch(args: argparse.Namespace) -> int:
-    if args.against or args.write_golden:
-        return fail("--against and --write-golden take one bag; several bags are held to NAME.golden.json beside them")
+    if args.against or args.write_golden or args.relations:
+        return fail(
+            "--against, --write-golden and --relations take one bag; several bags are held to NAME.golden.json "
+            "beside them"
+        )
     bags = find_bags(args.bags)
     check_writable(args.out, "--out", folder=True)
     jobs = []

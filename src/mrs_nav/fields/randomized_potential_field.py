@@ -14,6 +14,14 @@ The point moves by explicit Euler steps ``x[t + dt] = x[t] + v dt`` in one of tw
   along the field, ``(x[t + dt] - x[t]) . V(x[t + dt]) > 0``; that test starts only after ``min_walk_steps``
   steps, so that one lucky step does not drop the point straight back into the basin it is leaving.
 
+- **navigation function** (optional, ``guide_after_walks``; not in the assignment, it is this project's answer to
+  traps a random walk rarely leaves, such as cups and U-shapes): once a point has made ``guide_after_walks``
+  random walks (and stalls again, so they failed to escape), the next stall hands it to the wavefront of
+  :mod:`mrs_nav.fields.navigation_function`: it heads at ``max_speed`` for a point a few cells down the geodesic
+  distance to the goal, which has no local minimum, and returns to best first once that distance is
+  ``guide_margin`` below the distance at the worst trap so far *and* the goal is in straight sight. The guide
+  never passes a gap the (grown) obstacles close.
+
 Steps that would enter an obstacle are refused (the point stays and, in a walk, draws a new heading), so
 the trajectory never crosses an obstacle even where the random walk's speed exceeds the field's.
 
@@ -32,8 +40,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from mrs_nav.errors import InvalidInputError
+from mrs_nav.fields.navigation_function import NavigationFunction
 from mrs_nav.fields.path_simplification import simplify_path
-from mrs_nav.fields.potential_field import PotentialField, cap
+from mrs_nav.fields.potential_field import PotentialField, cap, workspace_bounds
 from mrs_nav.geometry import FloatArray
 from mrs_nav.maps.obstacles import BoolArray
 from mrs_nav.planning import PlanResult, headings_along, path_length
@@ -49,7 +58,9 @@ class EscapeSettings:
     (m/s) standard deviation of the attractive-field noise (0 turns the 1e fix off); ``random_walk`` turns
     the 1f escape on; ``stall_speed`` (m/s) and ``stall_distance`` (m) define a local minimum; ``stall_steps``
     how many stalled steps end a plan when the random walk is off; ``min_walk_steps`` the shortest walk;
-    ``walk_angle_std`` (rad) the heading noise of the walk.
+    ``walk_angle_std`` (rad) the heading noise of the walk; ``guide_after_walks`` how many random walks a point
+    makes before the navigation function takes over at its next stall (``None``: never, the assignment's method), and
+    ``guide_margin`` (m) how much closer to the goal than the trap the guide leads before best first resumes.
     """
 
     dt: float = 0.01
@@ -62,8 +73,12 @@ class EscapeSettings:
     stall_steps: int = 300
     min_walk_steps: int = 20
     walk_angle_std: float = math.pi
+    guide_after_walks: int | None = 1
+    guide_margin: float = 0.5
 
     def __post_init__(self) -> None:
+        if self.guide_after_walks is not None and self.guide_after_walks < 0:
+            raise InvalidInputError(f"guide_after_walks must be >= 0 or None, got {self.guide_after_walks}")
         for name in ("dt", "goal_tolerance", "noise_std", "stall_speed", "stall_distance", "walk_angle_std"):
             value = getattr(self, name)
             if not math.isfinite(value) or value < 0.0 or (name == "dt" and value == 0.0):
@@ -80,7 +95,7 @@ class EscapeSettings:
 class Rollout:
     """One seed's trajectory ``(K, 2)`` (not simplified), whether it reached the goal and why it stopped.
 
-    ``walking[k]`` tells whether step ``k -> k + 1`` was a random-walk step (``(K - 1,)`` booleans).
+    ``walking[k]`` tells whether step ``k -> k + 1`` was an escape step, random walk or guided (``(K - 1,)``).
     """
 
     seed: int
@@ -116,6 +131,14 @@ def roll_out(
         turns[:, i] = rng.normal(0.0, s.walk_angle_std, s.max_steps)
 
     goal = np.asarray(field.goal, dtype=np.float64)
+    guide = (
+        NavigationFunction(field.obstacles, field.goal, workspace_bounds(field.obstacles, start_xy, goal))
+        if s.guide_after_walks is not None
+        else None
+    )
+    guiding = np.zeros(n, dtype=bool)
+    walks = np.zeros(n, dtype=np.int64)
+    trap = np.full(n, math.inf)
     path = np.empty((s.max_steps + 1, n, 2))
     path[0] = start_xy
     walked = np.zeros((s.max_steps, n), dtype=bool)
@@ -136,22 +159,40 @@ def roll_out(
         clean = cap(uncapped, field.max_speed)
         stalled = (np.hypot(clean[:, 0], clean[:, 1]) < s.stall_speed) & (np.hypot(*(here - goal).T) > s.stall_distance)
         slow_for[idx] = np.where(stalled, slow_for[idx] + 1, 0)
+        fresh = stalled & ~walking[idx] & ~guiding[idx]
+        if guide is not None and s.guide_after_walks is not None:
+            handed = fresh & (walks[idx] >= s.guide_after_walks)
+            guiding[idx[handed]] = True
+            trap[idx[handed]] = np.minimum(trap[idx[handed]], guide.distance(here[handed]))
+            fresh &= ~handed
         if s.random_walk:
-            start_walk = stalled & ~walking[idx]
-            walking[idx[start_walk]] = True
-            walk_age[idx[start_walk]] = 0
+            walking[idx[fresh]] = True
+            walk_age[idx[fresh]] = 0
+            walks[idx[fresh]] += 1
         walk = walking[idx]
+        led = guiding[idx]
         heading[idx[walk]] += turns[k, idx[walk]]
         v = cap(uncapped + noise[k, idx], field.max_speed) if s.noise_std > 0 else clean
         v[walk] = field.v_max * np.column_stack([np.cos(heading[idx[walk]]), np.sin(heading[idx[walk]])])
+        if guide is not None and led.any():
+            # Towards the wavefront target; where that step is blocked (a corner it would cut), with the obstacles'
+            # push added, so that the point slides along the obstacle.
+            ahead = cap((guide.downhill(here[led]) - here[led]) / s.dt, field.max_speed)
+            direct = field.obstacles.segments_free(here[led], here[led] + s.dt * ahead)
+            pushed = cap(ahead + field.repulsive(here[led]), field.max_speed)
+            v[led] = np.where(direct[:, None], ahead, pushed)
         proposed = here + s.dt * v
         ok = field.obstacles.segments_free(here, proposed)
         new = np.where(ok[:, None], proposed, here)
         x[idx] = new
         path[k + 1] = x
 
-        walked[k, idx[walk]] = True
+        walked[k, idx[walk | led]] = True
         walk_age[idx[walk]] += 1
+        if guide is not None and led.any():
+            closer = guide.distance(new[led]) < trap[idx[led]] - s.guide_margin
+            sight = field.obstacles.segments_free(new[led], np.repeat(goal[None, :], int(led.sum()), axis=0))
+            guiding[idx[led][closer & sight]] = False
         if walk.any():
             moved = new[walk] - here[walk]
             downhill = np.einsum("ij,ij->i", moved, field.velocity(new[walk])) > 0.0

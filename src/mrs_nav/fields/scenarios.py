@@ -10,6 +10,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,8 +35,9 @@ class Scenario:
     goal: tuple[float, float]
     bounds: Bounds
 
-    def field(self, decay: float = DEFAULT_DECAY) -> PotentialField:
-        return PotentialField.build(self.goal, self.obstacles, self.bounds, decay=decay)
+    def field(self, decay: float = DEFAULT_DECAY, robot_radius: float = 0.0) -> PotentialField:
+        """The field around the obstacles grown by ``robot_radius`` (m), so that the point stands for the robot."""
+        return PotentialField.build(self.goal, self.obstacles.inflated(robot_radius), self.bounds, decay=decay)
 
 
 def arena_walls(half_width: float = ARENA_HALF_WIDTH, thickness: float = WALL_THICKNESS) -> FloatArray:
@@ -71,3 +73,85 @@ def two_cylinder_trap() -> Scenario:
     obstacles = Obstacles.from_circles([[0.0, 0.25, 0.3], [0.0, -0.25, 0.3]])
     start, goal = (-1.5, 0.0), (1.5, 0.0)
     return Scenario("two-cylinder local minimum", obstacles, start, goal, workspace_bounds(obstacles, start, goal))
+
+
+# ---- concave traps (start (-1.5, 0), goal (1.5, 0) in the trap's own frame) ----------------------------------
+
+TRAP_START = (-1.5, 0.0)
+TRAP_GOAL = (1.5, 0.0)
+
+
+def _placed(obstacles: Obstacles, angle: float, shift: tuple[float, float]) -> Obstacles:
+    """``obstacles`` rotated by ``angle`` (rad) about the origin, then moved by ``shift`` (m)."""
+    c, s = math.cos(angle), math.sin(angle)
+    rot = np.array([[c, -s], [s, c]])
+    circles = obstacles.circles.copy()
+    circles[:, :2] = circles[:, :2] @ rot.T + shift
+    boxes = obstacles.boxes.copy()
+    boxes[:, :2] = boxes[:, :2] @ rot.T + shift
+    boxes[:, 2] += angle
+    return Obstacles(circles=circles, boxes=boxes)
+
+
+def _trap(name: str, obstacles: Obstacles, angle: float, shift: tuple[float, float]) -> Scenario:
+    placed = _placed(obstacles, angle, shift)
+    return Scenario(name, placed, TRAP_START, TRAP_GOAL, workspace_bounds(placed, TRAP_START, TRAP_GOAL))
+
+
+def cylinder_cup(
+    count: int, arc_radius: float = 0.5, gap: float = 0.1, angle: float = 0.0, shift: tuple[float, float] = (0.0, 0.0)
+) -> Scenario:
+    """``count`` cylinders on a half circle of ``arc_radius`` m opening towards the start, ``gap`` m apart (too
+    narrow for the robot), rotated by ``angle`` and moved by ``shift``."""
+    theta = np.linspace(-math.pi / 2, math.pi / 2, count)
+    chord = 2.0 * arc_radius * math.sin(math.pi / (2 * (count - 1)))
+    radius = (chord - gap) / 2.0
+    cup = Obstacles(
+        circles=np.column_stack([arc_radius * np.cos(theta), arc_radius * np.sin(theta), np.full(count, radius)])
+    )
+    return _trap(f"cup of {count} cylinders (r {arc_radius:g} m, {math.degrees(angle):.0f} deg)", cup, angle, shift)
+
+
+def box_u(
+    width: float = 1.0,
+    depth: float = 0.8,
+    thickness: float = 0.1,
+    angle: float = 0.0,
+    shift: tuple[float, float] = (0.0, 0.0),
+) -> Scenario:
+    """A U of three boxes, inner ``width`` x ``depth`` m, its back towards the goal and its mouth towards the
+    start, rotated by ``angle`` and moved by ``shift``."""
+    half_w, t = width / 2.0, thickness / 2.0
+    boxes = [
+        [depth / 2.0 + t, 0.0, 0.0, t, half_w + thickness],
+        [0.0, half_w + t, 0.0, depth / 2.0 + t, t],
+        [0.0, -(half_w + t), 0.0, depth / 2.0 + t, t],
+    ]
+    return _trap(
+        f"U of boxes ({width:g} x {depth:g} m, {math.degrees(angle):.0f} deg)",
+        Obstacles(boxes=np.array(boxes)),
+        angle,
+        shift,
+    )
+
+
+def wall_with_gap(
+    gap: float = 0.45,
+    *,
+    length: float = 2.4,
+    offset: float = 0.5,
+    thickness: float = 0.1,
+    angle: float = 0.0,
+    shift: tuple[float, float] = (0.0, 0.0),
+) -> Scenario:
+    """A wall ``length`` m long across the line from start to goal with one ``gap`` m wide opening ``offset`` m
+    off that line, rotated by ``angle`` and moved by ``shift``."""
+    lo, hi = -length / 2.0, length / 2.0
+    a, b = offset - gap / 2.0, offset + gap / 2.0
+    boxes = [
+        [0.0, (lo + a) / 2.0, 0.0, thickness / 2.0, (a - lo) / 2.0],
+        [0.0, (b + hi) / 2.0, 0.0, thickness / 2.0, (hi - b) / 2.0],
+    ]
+    return _trap(
+        f"wall with a {gap:g} m gap ({math.degrees(angle):.0f} deg)", Obstacles(boxes=np.array(boxes)), angle, shift
+    )

@@ -169,18 +169,23 @@ def load_map(path: str | Path) -> OccupancyGrid:
         raise MapFileError(f"{path}: {err}") from err
 
 
-def save_map(grid: OccupancyGrid, path: str | Path) -> Path:
+def save_map(
+    grid: OccupancyGrid, path: str | Path, *, occupied_min: int = OCCUPIED_MIN, free_max: int = FREE_MAX
+) -> Path:
     """Write ``grid`` as map_server files: ``path`` (``.yaml``) and the ``.pgm`` beside it; returns the yaml path.
 
-    Cells at or above 65 are written occupied, 0..19 free, the rest unknown (map_saver's convention).
+    Cells at or above ``occupied_min`` (65) are written occupied, ``0..free_max`` (19) free, the rest unknown
+    (map_saver's convention; its ``--occ`` and ``--free``).
     """
     path = Path(path)
     if path.suffix != ".yaml":
         raise InvalidInputError(f"{path}: a map description must end in .yaml")
+    if not 0 <= free_max < occupied_min <= OCCUPIED:
+        raise InvalidInputError(f"need 0 <= free ({free_max}) < occupied ({occupied_min}) <= 100")
     image_path = path.with_suffix(".pgm")
     pixels = np.full(grid.values.shape, _SAVE_UNKNOWN, dtype=np.uint8)
-    pixels[(grid.values >= 0) & (grid.values <= FREE_MAX)] = _SAVE_FREE
-    pixels[grid.values >= OCCUPIED_MIN] = _SAVE_OCCUPIED
+    pixels[(grid.values >= 0) & (grid.values <= free_max)] = _SAVE_FREE
+    pixels[grid.values >= occupied_min] = _SAVE_OCCUPIED
     header = f"P5\n# CREATOR: mrs_nav {grid.resolution:.3f} m/pix\n{grid.width} {grid.height}\n255\n".encode()
     meta = (
         f"image: {image_path.name}\n"

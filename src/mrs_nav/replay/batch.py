@@ -26,7 +26,7 @@ from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.replay.golden import load_golden, regressions
 from mrs_nav.replay.session_replay import PlanOptions, SessionReplay, replay_session, write_session_outputs
 from mrs_nav.replay.slam_replay import write_outputs
-from mrs_nav.slam.config import SlamConfig
+from mrs_nav.slam.config import MAX_COORDINATE_M, SlamConfig
 from mrs_nav.tables import markdown_table
 
 GOLDEN_SUFFIX = ".golden.json"
@@ -51,8 +51,8 @@ class BagJob:
 class BagOutcome:
     """What one job gave: its metrics and regressions against the golden, or the one-line error that stopped it.
 
-    ``summary`` (SLAM figures, including timings) and ``note`` (how an unindexed bag was read) are for printing
-    only; :func:`aggregate` leaves them out.
+    ``summary`` (SLAM figures, including timings) and ``notes`` (how an unindexed bag was read, what was skipped)
+    are for printing only; :func:`aggregate` leaves them out.
     """
 
     name: str
@@ -62,7 +62,7 @@ class BagOutcome:
     has_golden: bool = False
     error: str | None = None
     summary: dict[str, Any] = field(default_factory=dict)
-    note: str | None = None
+    notes: tuple[str, ...] = ()
 
     @property
     def verdict(self) -> str:
@@ -122,9 +122,27 @@ def replay_bag(job: BagJob, progress: Callable[[int], None] | None = None) -> tu
         regressions=tuple(r.describe() for r in found),
         has_golden=golden is not None,
         summary=result.summary(),
-        note=note,
+        notes=tuple(n for n in (note, *_skipped(session)) if n),
     )
     return outcome, session
+
+
+def _skipped(session: SessionReplay) -> list[str]:
+    """What the SLAM replay left out of the bag, in words (nothing when it used every message)."""
+    result = session.slam
+    notes = []
+    if result.scans_out_of_order or result.scans_rejected:
+        first = f" (first: {result.first_rejection})" if result.first_rejection else ""
+        notes.append(
+            f"skipped {result.scans_out_of_order} scans stamped at or before the previous scan and "
+            f"{result.scans_rejected} scans without odometry or with bad values, of {result.scans_read}{first}"
+        )
+    if result.odom_rejected:
+        notes.append(
+            f"skipped {result.odom_rejected} of {result.odom_read} odometry messages farther than "
+            f"{MAX_COORDINATE_M:g} m from the origin"
+        )
+    return notes
 
 
 def run_job(job: BagJob) -> BagOutcome:

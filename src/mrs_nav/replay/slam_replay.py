@@ -2,6 +2,12 @@
 
 Each scan is paired with the odometry pose interpolated at its stamp (scans wait for the next odometry message
 rather than being dropped), and the laser's mounting is read from ``/tf_static`` (identity if absent).
+
+Pairing needs time to move on: a scan stamped at or before the previous scan, or an odometry message stamped at
+or before the previous one, cannot be told apart from its predecessor. Such messages are skipped and counted;
+when they are more than :data:`MAX_UNPAIRED_FRACTION` of their topic (constant or few-valued stamps), the bag
+is refused with a :class:`BagError`: every scan would be paired with the same odometry pose and the map would
+be garbage with plausible figures.
 """
 
 from __future__ import annotations
@@ -18,23 +24,25 @@ import numpy as np
 
 from mrs_nav.bag.io import read_messages
 from mrs_nav.bag.messages import pose_from_odometry, scan_from_message, stamp_of
-from mrs_nav.errors import MrsNavError
+from mrs_nav.errors import BagError, MrsNavError
 from mrs_nav.geometry import Pose2D, yaw_from_quaternion
 from mrs_nav.maps.map_io import save_map
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.replay.pose_track import PoseTrack
-from mrs_nav.slam.config import SlamConfig
+from mrs_nav.slam.config import MAX_COORDINATE_M, SlamConfig
 from mrs_nav.slam.metrics import TrajectoryErrors, align_se2, trajectory_errors
+from mrs_nav.slam.relations import Relation, relation_errors
 from mrs_nav.slam.slam import Slam
 
 SCAN_TOPIC = "/scan"
 ODOM_TOPIC = "/odom"
 TRUTH_TOPIC = "/ground_truth/odom"
+MAX_UNPAIRED_FRACTION = 0.1
 
 
 @dataclass
 class SlamReplay:
-    """What a replay produced: the SLAM state, the processed poses and the timing (ms per processed scan)."""
+    """What a replay produced: the SLAM state, the processed poses and the timing (CPU ms per processed scan)."""
 
     slam: Slam
     stamps: list[float] = field(default_factory=list)
@@ -44,8 +52,16 @@ class SlamReplay:
     ms_per_scan: list[float] = field(default_factory=list)
     scans_read: int = 0
     scans_rejected: int = 0
+    first_rejection: str = ""
+    scans_out_of_order: int = 0
+    last_scan_stamp: float = -math.inf
+    odom_read: int = 0
+    odom_out_of_order: int = 0
+    odom_rejected: int = 0
     bag_duration_s: float = 0.0
+    cpu_s: float = 0.0
     wall_s: float = 0.0
+    odom_track: PoseTrack = field(default_factory=PoseTrack)
 
     @property
     def has_truth(self) -> bool:
@@ -54,15 +70,38 @@ class SlamReplay:
     def errors(self) -> TrajectoryErrors | None:
         return trajectory_errors(self.estimate, self.truth) if self.has_truth else None
 
+    def reject(self, reason: str) -> None:
+        """Count a scan that could not be used; the first reason is kept for the user."""
+        self.scans_rejected += 1
+        self.first_rejection = self.first_rejection or reason
+
+    def relation_errors(self, relations: list[Relation], offset: float | None = None) -> dict[str, Any]:
+        """The relations metric (:mod:`mrs_nav.slam.relations`) of the SLAM trajectory, and of the bag's ground
+        truth bridged the same way (``relations_reference_*``: the floor the bridging leaves) when it has one."""
+        stamps = self.stamps
+        estimate = [p.pose for p in self.slam.processed]
+        mine = relation_errors(relations, stamps, estimate, self.odom_track.at, self.odometry, offset=offset)
+        out: dict[str, Any] = mine.as_dict()
+        if self.has_truth:
+            # The truth's own odometry is unknown: bridge it with the same wheel odometry.
+            floor = relation_errors(
+                relations, stamps, self.truth, self.odom_track.at, self.odometry, offset=mine.offset_s
+            )
+            out["relations_reference_trans_mean_m"] = floor.trans_mean_m
+            out["relations_reference_rot_mean_deg"] = floor.rot_mean_deg
+        return out
+
     def summary(self) -> dict[str, Any]:
         """The JSON summary printed by ``mrs-nav replay --slam --json`` (error fields None without truth)."""
         errors = self.errors()
         ms = np.asarray(self.ms_per_scan) if self.ms_per_scan else np.full(1, math.nan)
         return {
             "scans": len(self.estimate),
+            "scans_skipped": self.scans_out_of_order + self.scans_rejected,
             "ms_per_scan_median": float(np.median(ms)),
             "ms_per_scan_p95": float(np.percentile(ms, 95)),
-            "realtime_factor": self.bag_duration_s / self.wall_s if self.wall_s > 0 else None,
+            # CPU time, not wall time: on a shared machine the wall clock measures the neighbours.
+            "realtime_factor": self.bag_duration_s / self.cpu_s if self.cpu_s > 0 else None,
             "ate_rmse_m": errors.ate_rmse_m if errors else None,
             "ate_rmse_deg": errors.ate_rmse_deg if errors else None,
             "rpe_trans_mean_m": errors.rpe_trans_mean_m if errors else None,
@@ -93,10 +132,10 @@ def laser_mounting(bag: Path, base_frame: str = "base_footprint") -> Pose2D:
 def replay_slam(bag: Path, config: SlamConfig, progress: Callable[[int], None] | None = None) -> SlamReplay:
     """Run SLAM over ``bag`` (needs ``/scan`` and ``/odom``; uses ``/ground_truth/odom`` if present)."""
     result = SlamReplay(Slam(config, laser_mounting(bag)))
-    odom, truth = PoseTrack(), PoseTrack()
+    odom, truth = result.odom_track, PoseTrack()
     pending: deque[tuple[float, Any]] = deque()
     first_stamp = last_stamp = math.nan
-    start = time.perf_counter()
+    start, wall_start = time.process_time(), time.perf_counter()
     topics = [SCAN_TOPIC, ODOM_TOPIC, TRUTH_TOPIC]
     for topic, _, msg in read_messages(bag, topics, required=[SCAN_TOPIC, ODOM_TOPIC]):
         stamp = stamp_of(msg)
@@ -109,7 +148,15 @@ def replay_slam(bag: Path, config: SlamConfig, progress: Callable[[int], None] |
             if progress is not None:
                 progress(1)
         elif topic == ODOM_TOPIC:
-            odom.add(stamp, pose_from_odometry(msg))
+            result.odom_read += 1
+            pose = pose_from_odometry(msg)
+            if stamp <= odom.latest:
+                result.odom_out_of_order += 1
+            elif max(abs(pose.x), abs(pose.y)) > MAX_COORDINATE_M:
+                # One wild reading must not be interpolated into its neighbours' scans: drop it.
+                result.odom_rejected += 1
+            else:
+                odom.add(stamp, pose)
         else:
             truth.add(stamp, pose_from_odometry(msg))
         # A scan is processed once odometry reaches its stamp; earlier scans never wait on later ones.
@@ -117,7 +164,9 @@ def replay_slam(bag: Path, config: SlamConfig, progress: Callable[[int], None] |
             _process(result, *pending.popleft(), odom, truth)
     while pending:
         _process(result, *pending.popleft(), odom, truth)
-    result.wall_s = time.perf_counter() - start
+    result.cpu_s = time.process_time() - start
+    result.wall_s = time.perf_counter() - wall_start
+    _check_pairing(bag, result)
     result.bag_duration_s = 0.0 if math.isnan(first_stamp) else last_stamp - first_stamp
     # Ground truth that arrived after its scan (e.g. recorded at a lower rate) is matched now.
     matched = [truth.at(t) for t in result.stamps]
@@ -125,21 +174,36 @@ def replay_slam(bag: Path, config: SlamConfig, progress: Callable[[int], None] |
     return result
 
 
+def _check_pairing(bag: Path, result: SlamReplay) -> None:
+    for what, bad, total in (
+        ("scans", result.scans_out_of_order, result.scans_read),
+        ("odometry messages", result.odom_out_of_order, result.odom_read),
+    ):
+        if bad > MAX_UNPAIRED_FRACTION * total:
+            raise BagError(
+                f"bag {bag}: {bad} of {total} {what} are stamped at or before the previous one, so scans cannot be "
+                "paired with distinct odometry; fix the stamps (carmen2bag repairs a CARMEN log's)"
+            )
+
+
 def _process(result: SlamReplay, stamp: float, msg: Any, odom: PoseTrack, truth: PoseTrack) -> None:
+    if stamp <= result.last_scan_stamp:
+        result.scans_out_of_order += 1
+        return
+    result.last_scan_stamp = stamp
     pose = odom.at(stamp)
     if pose is None:
-        result.scans_rejected += 1
+        result.reject(f"scan at {stamp:.3f} s: no odometry within {odom.tolerance} s")
         return
+    t0 = time.process_time()
     try:
-        scan = scan_from_message(msg)
-    except MrsNavError:
-        result.scans_rejected += 1
+        done = result.slam.add_scan(pose, scan_from_message(msg), stamp)
+    except MrsNavError as err:
+        result.reject(f"scan at {stamp:.3f} s: {err}")
         return
-    t0 = time.perf_counter()
-    done = result.slam.add_scan(pose, scan, stamp)
     if done is None:
         return
-    result.ms_per_scan.append(1000.0 * (time.perf_counter() - t0))
+    result.ms_per_scan.append(1000.0 * (time.process_time() - t0))
     result.stamps.append(stamp)
     result.estimate.append(done.pose)
     result.odometry.append(pose)

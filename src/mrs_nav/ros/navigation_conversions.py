@@ -2,16 +2,22 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+import numpy.typing as npt
 import rospy
 import tf2_ros
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Path
+from sensor_msgs.msg import LaserScan
 
+from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
-from mrs_nav.ros.conversions import pose_from_msg, pose_from_transform, pose_msg
+from mrs_nav.navigation.obstacles import beam_ends
+from mrs_nav.ros.conversions import laser_scan_arrays, pose_from_msg, pose_from_transform, pose_msg
 
 
 def grid_from_msg(msg: OccupancyGridMsg) -> OccupancyGrid:
@@ -64,3 +70,54 @@ def latest_pose(buffer: tf2_ros.Buffer, frame: str, child: str, timeout_s: float
         rospy.logwarn_throttle(5.0, f"{who}: the robot pose from tf is {age:.1f} s old")
         return None
     return pose_from_transform(transform)
+
+
+def grid_msg(grid: OccupancyGrid, stamp: rospy.Time, frame: str) -> OccupancyGridMsg:
+    """A ``nav_msgs/OccupancyGrid`` of ``grid`` (values as they are: -1 unknown, 0..100)."""
+    msg = OccupancyGridMsg()
+    msg.header.stamp = stamp
+    msg.header.frame_id = frame
+    msg.info.map_load_time = stamp
+    msg.info.resolution = grid.resolution
+    msg.info.width, msg.info.height = grid.width, grid.height
+    msg.info.origin = pose_msg(Pose2D(*grid.origin))
+    msg.data = grid.values.ravel().tolist()
+    return msg
+
+
+def goal_heading(msg: PoseStamped) -> float | None:
+    """The heading (rad) a goal asks for, or None when its orientation is the all-zero quaternion (no rotation:
+    a goal sent without one)."""
+    q = msg.pose.orientation
+    if q.x == 0.0 and q.y == 0.0 and q.z == 0.0 and q.w == 0.0:
+        return None
+    return pose_from_msg(msg.pose).yaw
+
+
+def scan_in_frame(
+    buffer: tf2_ros.Buffer, msg: LaserScan, frame: str
+) -> tuple[FloatArray, FloatArray, npt.NDArray[np.bool_]]:
+    """A laser scan in ``frame`` at the latest transform: the laser's position ``(2,)``, the beam end points
+    ``(N, 2)`` (at the return, or at ``range_max`` for beams without one) and which beams returned.
+
+    Raises InvalidInputError for a scan whose angles or range limits are not finite numbers, and
+    ``tf2_ros.TransformException`` when tf cannot place the laser."""
+    numbers = (msg.angle_min, msg.angle_increment, msg.range_min, msg.range_max)
+    if not all(math.isfinite(v) for v in numbers) or msg.range_max <= 0.0:
+        raise InvalidInputError(
+            f"scan angle_min {msg.angle_min}, angle_increment {msg.angle_increment}, range_min {msg.range_min},"
+            f" range_max {msg.range_max}: not usable numbers"
+        )
+    angles, ranges = laser_scan_arrays(msg)
+    laser = pose_from_transform(buffer.lookup_transform(frame, msg.header.frame_id, rospy.Time(0)))
+    return beam_ends(laser, angles, ranges, msg.range_min, msg.range_max)
+
+
+def publish_unless_shutdown(publisher: rospy.Publisher, msg: object, who: str) -> None:
+    """Publish ``msg``; a topic closed by a shutdown under a timer tick in flight is no error (Ctrl-C)."""
+    try:
+        publisher.publish(msg)
+    except rospy.ROSException as err:
+        if not (rospy.is_shutdown() or rospy.core.is_shutdown_requested()):
+            raise
+        rospy.logdebug(f"{who}: not sent while shutting down: {err}")

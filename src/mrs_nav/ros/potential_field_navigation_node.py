@@ -4,10 +4,13 @@
 Obstacles come from the world file (``~obstacles: world``) or from each ``scan`` (``~obstacles: scan``); the
 pose from ``ground_truth/odom`` (``~pose_source: ground_truth``) or tf ``~frame -> base_footprint``
 (``~pose_source: tf``); the goal from ``~goal_x``/``~goal_y`` or ``move_base_simple/goal``. Publishes
-``cmd_vel`` and ``~status`` (std_msgs/String, latched, ``"<state>: <message>"``) and appends the robot's
-trajectory to ``~trajectory_file`` (lines ``t x y yaw``, sim seconds, metres, radians), as the course's
-exercise wrote ``/tmp/gazebo_exercise.txt`` for plotting. With ``~heartbeat`` (default true) ``cmd_vel`` goes
-out every control period even while idle (a zero Twist), which is what paces a simulator in lockstep.
+``cmd_vel`` and ``~status`` (std_msgs/String, latched, ``"<state>: <message>"``) and writes the robot's
+trajectory to ``~trajectory_file`` (default ``$ROS_HOME/potential_field_trajectory.csv``, ``none`` for no file)
+as CSV with the header ``t,x,y,yaw`` (sim seconds, metres, radians), which the course's plotting reads with
+``np.genfromtxt(path, delimiter=",", names=True)``. With ``~heartbeat`` (default false; the launch file sets it
+with ``lockstep:=true``) ``cmd_vel`` goes out every control period even while idle (a zero Twist), which is
+what paces a simulator in lockstep. A scan whose angles or range limits are not finite numbers is dropped with
+a throttled warning.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from pathlib import Path
 from typing import TextIO
 
 import numpy as np
+import rospkg
 import rospy
 import tf2_ros
 from geometry_msgs.msg import PoseStamped, Twist
@@ -38,10 +42,11 @@ from mrs_nav.ros.conversions import (
     pose_from_transform,
     valid_ranges,
 )
-from mrs_nav.ros.navigation_conversions import latest_pose, pose_in_frame
+from mrs_nav.ros.navigation_conversions import latest_pose, pose_in_frame, publish_unless_shutdown
 from mrs_nav.ros.params import private_param
 
 OBSTACLE_SOURCES = ("world", "scan")
+TRAJECTORY_FILE = "potential_field_trajectory.csv"  # under ROS_HOME unless ~trajectory_file says otherwise
 POSE_SOURCES = ("ground_truth", "tf")
 
 
@@ -57,9 +62,9 @@ class PotentialFieldNavigationConfig:
     goal: tuple[float, float] | None = None
     rate_hz: float = 10.0
     pose_timeout_s: float = 1.0
-    trajectory_file: Path | None = Path("/tmp/potential_field_trajectory.txt")
+    trajectory_file: Path | None = None
     seed: int | None = None
-    heartbeat: bool = True
+    heartbeat: bool = False
     follower: FieldFollowerConfig = field(default_factory=FieldFollowerConfig)
 
     def __post_init__(self) -> None:
@@ -78,7 +83,7 @@ class PotentialFieldNavigationConfig:
     def from_params(cls) -> PotentialFieldNavigationConfig:
         gx, gy = private_param("goal_x", math.nan), private_param("goal_y", math.nan)
         world = private_param("world", "")
-        trajectory = private_param("trajectory_file", "/tmp/potential_field_trajectory.txt")
+        trajectory = private_param("trajectory_file", "") or str(Path(rospkg.get_ros_home()) / TRAJECTORY_FILE)
         seed = private_param("seed", -1)
         follower = FieldFollowerConfig(
             epsilon=private_param("epsilon", 0.2),
@@ -98,9 +103,9 @@ class PotentialFieldNavigationConfig:
             goal=(gx, gy) if math.isfinite(gx) and math.isfinite(gy) else None,
             rate_hz=private_param("rate", 10.0),
             pose_timeout_s=private_param("pose_timeout", 1.0),
-            trajectory_file=Path(trajectory) if trajectory else None,
+            trajectory_file=None if trajectory == "none" else Path(trajectory).expanduser(),
             seed=None if seed < 0 else seed,
-            heartbeat=private_param("heartbeat", True),
+            heartbeat=private_param("heartbeat", False),
             follower=follower,
         )
 
@@ -136,9 +141,16 @@ class PotentialFieldNavigationNode:
 
     def start(self) -> None:
         """Open the trajectory file, take the goal parameter if set, and start the control loop."""
-        if self.config.trajectory_file is not None:
-            self._trajectory = self.config.trajectory_file.open("w", encoding="utf-8")
-            self._trajectory.write("# t x y yaw (sim s, m, m, rad): potential_field_navigation trajectory\n")
+        path = self.config.trajectory_file
+        if path is not None:
+            try:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                self._trajectory = path.open("w", encoding="utf-8")
+            except OSError as err:
+                rospy.logerr(f"potential_field_navigation: ~trajectory_file {path}: {err}; no trajectory is written")
+            else:
+                self._trajectory.write("t,x,y,yaw\n")  # sim s, m, m, rad
+                rospy.loginfo(f"potential_field_navigation: trajectory to {path}")
         rospy.on_shutdown(self._stop)
         self._status("idle", "waiting for a goal")
         if self.config.goal is not None:
@@ -186,9 +198,19 @@ class PotentialFieldNavigationNode:
             laser = pose.compose(pose_from_transform(mount))
         except (tf2_ros.TransformException, MrsNavError):
             laser = pose
+        numbers = (msg.angle_min, msg.angle_increment, msg.range_min, msg.range_max)
+        if not all(math.isfinite(v) for v in numbers):
+            rospy.logwarn_throttle(
+                5.0, f"potential_field_navigation: dropping a scan with non-finite angles or range limits {numbers}"
+            )
+            return
         angles, ranges = laser_scan_arrays(msg)
         ranges = np.where(valid_ranges(msg, ranges), ranges, np.inf)
-        obstacles = scan_obstacles(laser, angles, ranges)
+        try:
+            obstacles = scan_obstacles(laser, angles, ranges)
+        except MrsNavError as err:
+            rospy.logwarn_throttle(5.0, f"potential_field_navigation: dropping scan: {err}")
+            return
         with self._lock:
             self._scan_obstacles = obstacles
             if self._follower is not None:
@@ -210,16 +232,16 @@ class PotentialFieldNavigationNode:
     def _on_timer(self, event: rospy.timer.TimerEvent) -> None:
         now = rospy.Time.now().to_sec()
         pose = self._pose()
-        if pose is not None and self._trajectory is not None:
-            self._trajectory.write(f"{now:.3f} {pose.x:.4f} {pose.y:.4f} {pose.yaw:.4f}\n")
         with self._lock:
+            if pose is not None and self._trajectory is not None:
+                self._trajectory.write(f"{now:.3f},{pose.x:.4f},{pose.y:.4f},{pose.yaw:.4f}\n")
             follower = self._follower
             if follower is None:
                 if self.config.heartbeat:  # a zero Twist every tick while idle paces a lockstep simulator
-                    self._cmd_pub.publish(Twist())
+                    publish_unless_shutdown(self._cmd_pub, Twist(), "potential_field_navigation")
                 return
             if pose is None:
-                self._cmd_pub.publish(Twist())
+                publish_unless_shutdown(self._cmd_pub, Twist(), "potential_field_navigation")
                 rospy.logwarn_throttle(5.0, "potential_field_navigation: no pose; stopped")
                 return
             command = follower.command(pose, now)
@@ -227,21 +249,24 @@ class PotentialFieldNavigationNode:
                 self._follower = None
         twist = Twist()
         twist.linear.x, twist.angular.z = command.u, command.omega
-        self._cmd_pub.publish(twist)
+        publish_unless_shutdown(self._cmd_pub, twist, "potential_field_navigation")
         if command.done:
             gx, gy = follower.goal
             message = f"goal ({gx:.2f}, {gy:.2f}) reached, {math.hypot(gx - pose.x, gy - pose.y):.3f} m away"
             rospy.loginfo(f"potential_field_navigation: {message}")
             self._status("reached", message)
-            if self._trajectory is not None:
-                self._trajectory.flush()
+            with self._lock:
+                if self._trajectory is not None:
+                    self._trajectory.flush()
 
     def _status(self, state: str, message: str) -> None:
-        self._status_pub.publish(String(data=f"{state}: {message}"))
+        publish_unless_shutdown(self._status_pub, String(data=f"{state}: {message}"), "potential_field_navigation")
 
     def _stop(self) -> None:
         if self._timer is not None:
             self._timer.shutdown()
-        self._cmd_pub.publish(Twist())
-        if self._trajectory is not None:
-            self._trajectory.close()
+        publish_unless_shutdown(self._cmd_pub, Twist(), "potential_field_navigation")
+        with self._lock:  # a timer tick in flight writes under the lock: never to a closed file
+            if self._trajectory is not None:
+                self._trajectory.close()
+                self._trajectory = None

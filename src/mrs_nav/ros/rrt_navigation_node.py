@@ -1,13 +1,24 @@
-"""The ``rrt_navigation`` node: RRT* to an rviz 2D Nav Goal on the live SLAM map, followed by feedback
-linearisation (the course's ``rrt_navigation.py``), around :class:`mrs_nav.navigation.navigator.Navigator`.
+"""The ``rrt_navigation`` node: RRT* to a goal on the live SLAM map, followed by feedback linearisation (the
+course's ``rrt_navigation.py``), around :class:`mrs_nav.navigation.navigator.Navigator`, with move_base's
+interface.
 
-Subscribes ``map`` (nav_msgs/OccupancyGrid) and ``move_base_simple/goal`` (geometry_msgs/PoseStamped, any frame
-tf can bring into the map frame); reads the robot pose from tf ``map -> base_footprint``; publishes ``path``
-(nav_msgs/Path, frame map, latched), ``cmd_vel`` (geometry_msgs/Twist) and ``~status`` (std_msgs/String,
-latched, one message per event: ``"<state>: <message>"`` with state one of idle, active, preempted, reached,
-failed, refused). Every event is also logged (warnings for refusals and failures). With ``~heartbeat`` (default
-true) ``cmd_vel`` goes out every control period even while idle (a zero Twist), which is what paces a simulator
-in lockstep; false leaves ``cmd_vel`` silent while idle (e.g. for teleoperation).
+Inputs: ``map`` (nav_msgs/OccupancyGrid), ``scan`` (sensor_msgs/LaserScan: obstacles that are not on the map
+are marked for planning and a return ahead stops the robot), the robot pose from tf ``map -> odom ->
+base_footprint``, and goals (any frame tf can bring into the map frame; an all-zero orientation asks for no
+heading) on the ``move_base`` action (move_base_msgs/MoveBaseAction: goal, cancel, preemption by a new goal,
+feedback ``base_position`` every control period, result; status SUCCEEDED, ABORTED or REJECTED with a text
+reason, PREEMPTED) or on ``move_base_simple/goal`` (geometry_msgs/PoseStamped), which is re-sent as an action
+goal (as move_base does) so both take the same path. Service ``make_plan`` (nav_msgs/GetPlan) plans without
+moving (an empty path when it finds none).
+
+Outputs: ``cmd_vel`` (geometry_msgs/Twist) while a goal is active (and a zero Twist when it ends); with
+``~heartbeat`` also a zero Twist every control period while idle, which is what paces a simulator in lockstep;
+``path`` (nav_msgs/Path, frame map, latched); ``move_base/global_costmap/costmap`` (nav_msgs/OccupancyGrid,
+latched, at most once a second: the map as planned on, obstacles marked and inflated); ``~status``
+(std_msgs/String, latched, one per event: ``"<state>: <message>"``).
+
+The robot stops (the goal kept) when the ``map -> odom`` correction is older than ``~correction_freshness`` or
+the last scan older than ``~scan_timeout`` (sim time): a localisation source or laser that died.
 
 Planning runs in one worker thread, off the control timer: the timer keeps publishing ``cmd_vel`` every period
 (following the current path during a periodic replan, a zero Twist while there is no usable path), so a lockstep
@@ -16,22 +27,30 @@ simulator is never held still by a plan, and adopts the plan on the first tick a
 
 from __future__ import annotations
 
+import itertools
 import math
 import sys
 import threading
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 
+import actionlib
+import numpy as np
 import rospy
 import tf2_ros
 from geometry_msgs.msg import PoseStamped, Twist
+from move_base_msgs.msg import MoveBaseAction, MoveBaseActionGoal, MoveBaseFeedback, MoveBaseResult
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Path
+from nav_msgs.srv import GetPlan, GetPlanRequest, GetPlanResponse
+from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
+from mrs_nav.control.goal_approach import XY_GOAL_TOLERANCE, YAW_GOAL_TOLERANCE, ApproachConfig
 from mrs_nav.control.path_following import FollowerConfig
 from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.geometry import Pose2D
+from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.navigation.navigator import (
     PLANNERS,
     EventKind,
@@ -44,8 +63,19 @@ from mrs_nav.navigation.navigator import (
     PlanRequest,
     rrt_planner,
 )
+from mrs_nav.navigation.plan_worker import run_plan
 from mrs_nav.robot import BURGER_MAX_ANGULAR, BURGER_MAX_LINEAR, BURGER_RADIUS
-from mrs_nav.ros.navigation_conversions import grid_from_msg, latest_pose, path_msg, pose_in_frame
+from mrs_nav.ros.conversions import pose_msg
+from mrs_nav.ros.navigation_conversions import (
+    goal_heading,
+    grid_from_msg,
+    grid_msg,
+    latest_pose,
+    path_msg,
+    pose_in_frame,
+    publish_unless_shutdown,
+    scan_in_frame,
+)
 from mrs_nav.ros.params import private_param
 
 # The status word published with each event (the navigator's goal state after it).
@@ -61,6 +91,7 @@ STATUS_OF_EVENT = {
     EventKind.REACHED: "reached",
     EventKind.FAILED: "failed",
 }
+COSTMAP_PERIOD_S = 1.0  # sim seconds between costmap messages at most (rviz redraws a big grid slowly)
 
 
 @dataclass(frozen=True)
@@ -69,78 +100,109 @@ class RrtNavigationConfig:
 
     planner: str = "rrt_star"
     time_budget_s: float = 0.3
-    rate_hz: float = 10.0
+    controller_frequency: float = 10.0
     pose_timeout_s: float = 1.0
     correction_timeout_s: float = 5.0
+    correction_freshness_s: float = 0.3
+    scan_timeout_s: float = 0.4
     map_frame: str = "map"
     odom_frame: str = "odom"
     base_frame: str = "base_footprint"
     seed: int | None = None
-    heartbeat: bool = True
+    heartbeat: bool = False
     navigator: NavigatorConfig = field(default_factory=NavigatorConfig)
 
     def __post_init__(self) -> None:
         if self.planner not in PLANNERS:
             raise InvalidInputError(f"~planner: expected one of {', '.join(PLANNERS)}, got {self.planner!r}")
-        for name in ("time_budget_s", "rate_hz", "pose_timeout_s", "correction_timeout_s"):
+        for name in ("time_budget_s", "controller_frequency", "pose_timeout_s", "correction_timeout_s"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise InvalidInputError(f"~{name}: must be a positive number, got {value}")
+        for name in ("correction_freshness_s", "scan_timeout_s"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise InvalidInputError(f"~{name}: must be a number >= 0 (0 = off), got {value}")
 
     @classmethod
     def from_params(cls) -> RrtNavigationConfig:
+        max_linear = private_param("max_vel_x", BURGER_MAX_LINEAR)
+        max_angular = private_param("max_vel_theta", BURGER_MAX_ANGULAR)
         follower = FollowerConfig(
             speed=private_param("speed", 0.2),
             epsilon=private_param("epsilon", 0.1),
             gain=private_param("gain", 2.0),
-            max_linear=private_param("max_linear", BURGER_MAX_LINEAR),
-            max_angular=private_param("max_angular", BURGER_MAX_ANGULAR),
+            max_linear=max_linear,
+            max_angular=max_angular,
         )
+        approach = ApproachConfig(
+            xy_tolerance_m=private_param("xy_goal_tolerance", XY_GOAL_TOLERANCE),
+            yaw_tolerance_rad=private_param("yaw_goal_tolerance", YAW_GOAL_TOLERANCE),
+            max_linear=max_linear,
+            max_angular=max_angular,
+        )
+        planner_frequency = private_param("planner_frequency", 0.2)
+        if not (math.isfinite(planner_frequency) and planner_frequency >= 0.0):
+            raise InvalidInputError(f"~planner_frequency: must be a number >= 0 (0 = off), got {planner_frequency}")
         navigator = NavigatorConfig(
             robot_radius=private_param("robot_radius", BURGER_RADIUS),
             safety_margin_m=private_param("safety_margin", 0.1),
-            goal_tolerance_m=private_param("goal_tolerance", 0.2),
+            stop_clearance_m=private_param("stop_clearance", 0.05),
+            approach_radius_m=private_param("approach_radius", 0.3),
             allow_unknown=private_param("allow_unknown", True),
             stray_distance_m=private_param("stray_distance", 0.3),
-            replan_period_s=private_param("replan_period", 5.0),
+            replan_period_s=1.0 / planner_frequency if planner_frequency > 0.0 else math.inf,
             improvement_ratio=private_param("improvement_ratio", 0.85),
             max_failed_plans=private_param("max_failed_plans", 5),
             retry_delay_s=private_param("retry_delay", 1.0),
             progress_timeout_s=private_param("progress_timeout", 30.0),
             map_timeout_s=private_param("map_timeout", 0.0),
             follower=follower,
+            approach=approach,
         )
         seed = private_param("seed", -1)
         return cls(
             planner=private_param("planner", "rrt_star"),
             time_budget_s=private_param("time_budget", 0.3),
-            rate_hz=private_param("rate", 10.0),
+            controller_frequency=private_param("controller_frequency", 10.0),
             pose_timeout_s=private_param("pose_timeout", 1.0),
             correction_timeout_s=private_param("correction_timeout", 5.0),
+            correction_freshness_s=private_param("correction_freshness", 0.3),
+            scan_timeout_s=private_param("scan_timeout", 0.4),
             map_frame=private_param("map_frame", "map"),
             odom_frame=private_param("odom_frame", "odom"),
             base_frame=private_param("base_frame", "base_footprint"),
             seed=None if seed < 0 else seed,
-            heartbeat=private_param("heartbeat", True),
+            heartbeat=private_param("heartbeat", False),
             navigator=navigator,
         )
 
 
 class RrtNavigationNode:
-    """Wires a :class:`Navigator` to ROS; :meth:`start` begins the control timer."""
+    """Wires a :class:`Navigator` to ROS; :meth:`start` begins the control timer and the action server."""
 
     def __init__(self, config: RrtNavigationConfig) -> None:
         self.config = config
-        planner = rrt_planner(config.planner, config.time_budget_s)
-        self.navigator = Navigator(planner, config.navigator, seed=config.seed)
+        self._planner = rrt_planner(config.planner, config.time_budget_s)
+        self.navigator = Navigator(self._planner, config.navigator, seed=config.seed)
+        self._query_rng = np.random.default_rng(None if config.seed is None else config.seed + 1)
         self._lock = threading.Lock()
         self._tf_buffer = tf2_ros.Buffer()
         self._tf_listener = tf2_ros.TransformListener(self._tf_buffer)
         self._cmd_pub = rospy.Publisher("cmd_vel", Twist, queue_size=1, tcp_nodelay=True)
         self._path_pub = rospy.Publisher("path", Path, queue_size=1, latch=True)
+        self._costmap_pub = rospy.Publisher(
+            "move_base/global_costmap/costmap", OccupancyGridMsg, queue_size=1, latch=True
+        )
         self._status_pub = rospy.Publisher("~status", String, queue_size=10, latch=True)
-        self._map_sub = rospy.Subscriber("map", OccupancyGridMsg, self._on_map, queue_size=1)
-        self._goal_sub = rospy.Subscriber("move_base_simple/goal", PoseStamped, self._on_goal, queue_size=1)
+        self._action_goal_pub = rospy.Publisher("move_base/goal", MoveBaseActionGoal, queue_size=1)
+        self._server = actionlib.ActionServer(
+            "move_base", MoveBaseAction, self._on_action_goal, self._on_action_cancel, auto_start=False
+        )
+        self._goal_ids = itertools.count(1)
+        self._active: actionlib.ServerGoalHandle | None = None  # the goal the navigator is driving to
+        self._last_scan = -math.inf  # sim time the last usable scan arrived
+        self._costmap: tuple[OccupancyGrid | None, float] = (None, -math.inf)  # last published, when
         self._timer: rospy.Timer | None = None
         self._last_time = rospy.Time(0)
         # one worker: at most one plan runs at a time (the navigator asks for no other while one is in flight)
@@ -148,13 +210,20 @@ class RrtNavigationNode:
         self._plan: tuple[PlanRequest, Future[PlanOutcome]] | None = None
 
     def start(self) -> None:
-        """Publish the idle status, start the control loop and stop the robot on shutdown."""
+        """Publish the idle status, start the action server, the control loop and the inputs."""
         self._status_pub.publish(String(data="idle: waiting for a goal"))
         rospy.on_shutdown(self._stop)
+        self._server.start()
+        self._subs = [
+            rospy.Subscriber("map", OccupancyGridMsg, self._on_map, queue_size=1),
+            rospy.Subscriber("scan", LaserScan, self._on_scan, queue_size=1),
+            rospy.Subscriber("move_base_simple/goal", PoseStamped, self._on_simple_goal, queue_size=1),
+        ]
+        self._plan_service = rospy.Service("make_plan", GetPlan, self._on_make_plan)
         # The planner thread holds the GIL for long stretches; the default 5 ms switch interval would delay each
         # /clock, /tf and timer hand-off of the control loop by up to that, which is what paces a lockstep sim.
         sys.setswitchinterval(0.0005)
-        self._timer = rospy.Timer(rospy.Duration(1.0 / self.config.rate_hz), self._on_timer)
+        self._timer = rospy.Timer(rospy.Duration(1.0 / self.config.controller_frequency), self._on_timer)
 
     # -- inputs ---------------------------------------------------------------------------------------------
 
@@ -173,15 +242,90 @@ class RrtNavigationNode:
         with self._lock:
             self.navigator.set_map(grid, rospy.get_time())
 
-    def _on_goal(self, msg: PoseStamped) -> None:
+    def _on_scan(self, msg: LaserScan) -> None:
         try:
-            goal = pose_in_frame(self._tf_buffer, msg, self.config.map_frame)
-        except (MrsNavError, tf2_ros.TransformException) as err:
-            self._report([NavEvent(EventKind.REFUSED, f"goal refused: {err}")])
+            origin, ends, hit = scan_in_frame(self._tf_buffer, msg, self.config.map_frame)
+        except MrsNavError as err:
+            rospy.logwarn_throttle(5.0, f"rrt_navigation: dropping scan: {err}")
+            return
+        except tf2_ros.TransformException as err:
+            rospy.logwarn_throttle(5.0, f"rrt_navigation: dropping scan, no transform to the map: {err}")
             return
         with self._lock:
-            events = self.navigator.set_goal(goal.x, goal.y, rospy.get_time())
+            self.navigator.set_scan(origin, ends, hit)
+            self._last_scan = rospy.get_time()
+
+    def _on_simple_goal(self, msg: PoseStamped) -> None:
+        """Re-send an rviz goal as an action goal, as move_base does, so that it takes the action's path."""
+        goal = MoveBaseActionGoal()
+        goal.header.stamp = rospy.Time.now()
+        goal.goal_id.stamp = goal.header.stamp
+        goal.goal_id.id = f"move_base_simple-{next(self._goal_ids)}-{goal.header.stamp.to_sec():.3f}"
+        goal.goal.target_pose = msg
+        self._action_goal_pub.publish(goal)
+
+    def _on_action_goal(self, handle: actionlib.ServerGoalHandle) -> None:
+        """A new goal (called by actionlib with its lock held; ours is taken inside it, never the other way)."""
+        target = handle.get_goal().target_pose
+        try:
+            pose = pose_in_frame(self._tf_buffer, target, self.config.map_frame)
+        except (MrsNavError, tf2_ros.TransformException) as err:
+            event = NavEvent(EventKind.REFUSED, f"goal refused: {err}")
+            self._report([event])
+            handle.set_rejected(MoveBaseResult(), event.message)
+            return
+        yaw = goal_heading(target)
+        with self._lock:
+            events = self.navigator.set_goal(pose.x, pose.y, rospy.get_time(), yaw)
+            refused = events[-1].kind is EventKind.REFUSED
+            previous = None
+            if not refused:
+                previous, self._active = self._active, handle
         self._report(events)
+        if refused:
+            handle.set_rejected(MoveBaseResult(), events[-1].message)
+            return
+        if previous is not None:
+            previous.set_canceled(MoveBaseResult(), "preempted by a new goal")
+        handle.set_accepted("accepted")
+
+    def _on_action_cancel(self, handle: actionlib.ServerGoalHandle) -> None:
+        with self._lock:
+            current = self._active is not None and handle.get_goal_id().id == self._active.get_goal_id().id
+            events = self.navigator.cancel() if current else []
+            if current:
+                self._active = None
+        self._report(events)
+        if current:
+            self._cmd_pub.publish(Twist())  # stop now, not at the next tick
+        handle.set_canceled(MoveBaseResult(), "cancelled")
+
+    def _on_make_plan(self, req: GetPlanRequest) -> GetPlanResponse:
+        """Plan from ``req.start`` (the robot when its frame is empty) to ``req.goal`` without moving."""
+        response = GetPlanResponse()
+        response.plan.header.frame_id = self.config.map_frame
+        response.plan.header.stamp = rospy.Time.now()
+        try:
+            goal = pose_in_frame(self._tf_buffer, req.goal, self.config.map_frame)
+            start = (
+                pose_in_frame(self._tf_buffer, req.start, self.config.map_frame)
+                if req.start.header.frame_id
+                else self._pose()
+            )
+            if start is None:
+                raise InvalidInputError("no start given and no robot pose")
+            with self._lock:
+                request = self.navigator.plan_query(start, (goal.x, goal.y))
+        except (MrsNavError, tf2_ros.TransformException) as err:
+            rospy.logwarn(f"rrt_navigation: make_plan: {err}")
+            return response
+        cfg = self.config.navigator
+        result, why = run_plan(request, self._planner, self._query_rng, cfg.inflation_m, cfg.plan_turned_round)
+        if result is None:
+            rospy.logwarn(f"rrt_navigation: make_plan found no path: {why}")
+            return response
+        response.plan = path_msg(result.path, response.plan.header.stamp, self.config.map_frame)
+        return response
 
     def _pose(self) -> Pose2D | None:
         """The robot pose in the map frame: the latest ``map -> odom`` correction (SLAM publishes it at its own
@@ -194,6 +338,21 @@ class RrtNavigationNode:
         correction = latest_pose(self._tf_buffer, cfg.map_frame, cfg.odom_frame, cfg.correction_timeout_s, who)
         return None if correction is None else correction.compose(odom)
 
+    def _blind(self, now: float) -> str | None:
+        """Why the robot must stop although it has a pose: its localisation or its laser has gone quiet."""
+        cfg = self.config
+        if cfg.correction_freshness_s > 0.0:
+            try:
+                stamp = self._tf_buffer.lookup_transform(cfg.map_frame, cfg.odom_frame, rospy.Time(0)).header.stamp
+            except tf2_ros.TransformException:
+                return None  # no pose at all: the navigator holds for that
+            age = now - stamp.to_sec()
+            if not stamp.is_zero() and age > cfg.correction_freshness_s:
+                return f"the {cfg.map_frame}->{cfg.odom_frame} correction is {age:.2f} s old (localisation lost?)"
+        if cfg.scan_timeout_s > 0.0 and now - self._last_scan > cfg.scan_timeout_s:
+            return f"no laser scan for more than {cfg.scan_timeout_s:.2f} s"
+        return None
+
     # -- control ----------------------------------------------------------------------------------------------
 
     def _on_timer(self, event: rospy.timer.TimerEvent) -> None:
@@ -202,25 +361,67 @@ class RrtNavigationNode:
             rospy.logwarn("rrt_navigation: time jumped backwards; dropping the goal")
             with self._lock:
                 self._report(self.navigator.cancel())
+                self._last_scan = -math.inf
             self._tf_buffer.clear()
         self._last_time = now
         pose = self._pose()
+        blind = self._blind(now.to_sec())
         with self._lock:
             finished = self._finished_plan()
-            command = self.navigator.update(pose, now.to_sec(), defer=True)
+            command = self.navigator.update(pose, now.to_sec(), defer=True, hold=blind)
             if command.request is not None:
                 self._plan = (command.request, self._planner_pool.submit(self.navigator.run_plan, command.request))
             state = self.navigator.state
+            handle = self._active
+            if state is not GoalState.ACTIVE:
+                self._active = None
+            costmap = self._due_costmap(now.to_sec())
         twist = Twist()
         twist.linear.x, twist.angular.z = command.u, command.omega
         events = finished.events + command.events
         # the heartbeat (a zero Twist every tick while idle) paces a lockstep simulator at any sim rate
         if self.config.heartbeat or state is GoalState.ACTIVE or events:
-            self._cmd_pub.publish(twist)
+            publish_unless_shutdown(self._cmd_pub, twist, "rrt_navigation")
         path = command.path if command.path is not None else finished.path
         if path is not None:
-            self._path_pub.publish(path_msg(path, now, self.config.map_frame))
+            publish_unless_shutdown(self._path_pub, path_msg(path, now, self.config.map_frame), "rrt_navigation")
+        if costmap is not None:
+            publish_unless_shutdown(self._costmap_pub, grid_msg(costmap, now, self.config.map_frame), "rrt_navigation")
         self._report(events)
+        if handle is not None:
+            self._action_step(handle, state, pose, now, events)
+
+    def _action_step(
+        self,
+        handle: actionlib.ServerGoalHandle,
+        state: GoalState,
+        pose: Pose2D | None,
+        now: rospy.Time,
+        events: tuple[NavEvent, ...],
+    ) -> None:
+        """Feedback for the active goal, or its result once it ended (outside our lock: actionlib locks too)."""
+        if state is GoalState.ACTIVE:
+            if pose is not None:
+                feedback = MoveBaseFeedback()
+                feedback.base_position.header.stamp = now
+                feedback.base_position.header.frame_id = self.config.map_frame
+                feedback.base_position.pose = pose_msg(pose)
+                handle.publish_feedback(feedback)
+            return
+        text = next((e.message for e in events if e.kind in {EventKind.REACHED, EventKind.FAILED}), str(state))
+        if state is GoalState.REACHED:
+            handle.set_succeeded(MoveBaseResult(), text)
+        else:
+            handle.set_aborted(MoveBaseResult(), text)
+
+    def _due_costmap(self, now: float) -> OccupancyGrid | None:
+        """The planning grid when it changed and the last costmap is old enough (called with the lock held)."""
+        grid = self.navigator.inflated_grid
+        last, when = self._costmap
+        if grid is None or grid is last or now - when < COSTMAP_PERIOD_S:
+            return None
+        self._costmap = (grid, now)
+        return grid
 
     def _finished_plan(self) -> NavCommand:
         """Hand a finished plan (if any) to the navigator (called with the lock held); its path and events."""
@@ -238,10 +439,12 @@ class RrtNavigationNode:
         """Log each event and publish it on ``~status``."""
         for e in events:
             (rospy.logwarn if e.kind.warning else rospy.loginfo)(f"rrt_navigation: {e.message}")
-            self._status_pub.publish(String(data=f"{STATUS_OF_EVENT[e.kind]}: {e.message}"))
+            status = String(data=f"{STATUS_OF_EVENT[e.kind]}: {e.message}")
+            publish_unless_shutdown(self._status_pub, status, "rrt_navigation")
 
     def _stop(self) -> None:
+        """On shutdown: stop the loop and the robot (publishing can fail once rospy has closed the topic)."""
         if self._timer is not None:
             self._timer.shutdown()
         self._planner_pool.shutdown(wait=False)
-        self._cmd_pub.publish(Twist())
+        publish_unless_shutdown(self._cmd_pub, Twist(), "rrt_navigation")

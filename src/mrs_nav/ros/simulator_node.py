@@ -14,6 +14,11 @@ speed. With ``~lockstep`` true the loop never runs more than ``~lockstep_period`
 ``cmd_vel`` it received, so a controller ticking on sim time keeps up at any rate (see
 :mod:`mrs_nav.sim.lockstep`: free running before the first command and after ``~lockstep_timeout`` wall seconds
 of silence). A bad ``cmd_vel`` (non-finite numbers) is logged and ignored; the watchdog then stops the robot.
+``~add_box`` (visualization_msgs/Marker of type CUBE: pose in the world frame, scale = full sizes in m, ``ns``
+its name) puts a box into the world at run time, e.g. across a corridor after the map was made.
+
+``~set_pose`` (geometry_msgs/Pose2D, world frame) teleports the robot, stopped, without its odometry noticing:
+the kidnapped-robot test of a localisation. A pose inside an obstacle is logged and ignored.
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ from typing import Any
 import rospkg
 import rospy
 import tf2_ros
+from geometry_msgs.msg import Pose2D as Pose2DMsg
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry as OdometryMsg
 from rosgraph_msgs.msg import Clock
@@ -35,15 +41,17 @@ from rospy import rostime
 from rospy.impl import simtime
 from sensor_msgs.msg import JointState, LaserScan
 from std_msgs.msg import UInt32
+from visualization_msgs.msg import Marker
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
-from mrs_nav.maps.world import load_world
+from mrs_nav.maps.world import Box, load_world
 from mrs_nav.ros.conversions import (
     clock_msg,
     joint_state_msg,
     laser_scan_msg,
     odometry_msg,
+    pose_from_msg,
     to_ros_time,
     transform_stamped,
     twist_from_msg,
@@ -183,6 +191,8 @@ class SimulatorNode:
         self._joints_pub = rospy.Publisher("joint_states", JointState, queue_size=10)
         self._tf = tf2_ros.TransformBroadcaster() if config.publish_tf else None
         self._cmd_sub = rospy.Subscriber("cmd_vel", Twist, self._on_cmd_vel, queue_size=10, tcp_nodelay=True)
+        self._box_sub = rospy.Subscriber("~add_box", Marker, self._on_add_box, queue_size=10)
+        self._set_pose_sub = rospy.Subscriber("~set_pose", Pose2DMsg, self._on_set_pose, queue_size=1)
         self._set_own_time = _own_the_clock()
         self._gate = LockstepGate(config.lockstep) if config.lockstep is not None else None
 
@@ -197,6 +207,40 @@ class SimulatorNode:
             now = self.sim.time
         if self._gate is not None:
             self._gate.on_command(now)
+
+    def _on_add_box(self, msg: Marker) -> None:
+        """Add a box obstacle at run time: a CUBE marker's pose (world frame) and scale (full sizes, m)."""
+        pose = msg.pose
+        if msg.type != Marker.CUBE:
+            rospy.logwarn_throttle(5.0, f"simulator: ~add_box: ignoring a marker of type {msg.type}, not CUBE")
+            return
+        box = Box(
+            msg.ns or f"box_{msg.id}",
+            pose.position.x,
+            pose.position.y,
+            pose.position.z if pose.position.z else msg.scale.z / 2.0,
+            pose_from_msg(pose).yaw,
+            msg.scale.x,
+            msg.scale.y,
+            msg.scale.z,
+        )
+        try:
+            with self._lock:
+                self.sim.add_box(box)
+        except InvalidInputError as err:
+            rospy.logwarn_throttle(5.0, f"simulator: ~add_box: {err}")
+            return
+        rospy.loginfo(f"simulator: added box {box.name!r} at ({box.x:.2f}, {box.y:.2f})")
+
+    def _on_set_pose(self, msg: Pose2DMsg) -> None:
+        try:
+            pose = Pose2D(msg.x, msg.y, msg.theta)
+            with self._lock:
+                self.sim.teleport(pose)
+        except InvalidInputError as err:
+            rospy.logwarn_throttle(5.0, f"simulator: ignoring set_pose: {err}")
+            return
+        rospy.loginfo(f"simulator: robot teleported to ({pose.x:.2f}, {pose.y:.2f}, {pose.yaw:.2f})")
 
     def _publish_state(self) -> None:
         cfg = self.config
@@ -261,8 +305,9 @@ class SimulatorNode:
             try:
                 self.step()
             except rospy.ROSException:
-                # Shutdown (from a signal, in another thread) closed the publishers under this step.
-                if rospy.is_shutdown():
+                # Shutdown (from a signal, in another thread) closed the publishers under this step; the
+                # shutdown flag may still be on its way when the topic is already closed.
+                if rospy.is_shutdown() or rospy.core.is_shutdown_requested():
                     return
                 raise
             if rtf > 0.0:

@@ -7,8 +7,11 @@ the update gates open. Publishes ``map`` (nav_msgs/OccupancyGrid, latched) and `
 ``~map_update_interval`` s of map change, and tf ``map_frame -> odom_frame`` every ``~transform_publish_period``
 s (20 Hz by default). Parameters take gmapping's names (see config/slam.yaml and the README).
 
-A scan that cannot be used (wrong length, bad geometry, no transform) is logged (throttled) and skipped; the
-node never dies of one. When sim time jumps backwards (a bag restarted), the map and the tf buffer are reset.
+A scan that cannot be used (wrong length, NaN angles, bad geometry, no transform, a pose far outside any
+building) is logged (throttled) and skipped; the node never dies of one and no message changes the map but by
+being mapped. A scan in another frame than the laser's (e.g. ``base_link``) is used with that frame's mounting
+when tf knows it, else dropped with a throttled warning. The map is reset only by the ``~reset`` service
+(std_srvs/Empty) or when sim time jumps backwards (a bag restarted); each reset is logged.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ import rospy
 import tf2_ros
 from nav_msgs.msg import MapMetaData, OccupancyGrid
 from sensor_msgs.msg import LaserScan
+from std_srvs.srv import Empty, EmptyRequest, EmptyResponse
 
 from mrs_nav.errors import MrsNavError
 from mrs_nav.geometry import Pose2D
@@ -80,7 +84,7 @@ class SlamNode:
         self.config = config
         self._lock = threading.Lock()
         self._slam: Slam | None = None  # made at the first scan, once the laser's mounting is known
-        self._laser_frame = ""
+        self._mountings: dict[str, Pose2D] = {}  # base -> scan frame, per frame seen (static mountings)
         self._last_clock = -math.inf
         self._last_map_time = -math.inf
         self._last_tf_stamp = -math.inf
@@ -91,6 +95,7 @@ class SlamNode:
         self._meta_pub = rospy.Publisher("map_metadata", MapMetaData, queue_size=1, latch=True)
         self._scan_sub = rospy.Subscriber("scan", LaserScan, self._on_scan, queue_size=5)
         self._timer = rospy.Timer(rospy.Duration(config.transform_publish_period), self._publish_transform)
+        self._reset_srv = rospy.Service("~reset", Empty, self._on_reset)
 
     # -- scans ----------------------------------------------------------------------------------------------------
 
@@ -99,23 +104,26 @@ class SlamNode:
         # The clock, not the scans' stamps, decides whether time went back: one bogus stamp must not reset.
         now = rospy.get_time()
         if now < self._last_clock - _TIME_JUMP:
-            rospy.logwarn(f"slam: time went back {self._last_clock - now:.1f} s; starting a new map")
-            with self._lock:
-                self._slam = None
+            self._reset(f"time went back {self._last_clock - now:.1f} s")
             self._buffer.clear()
-            self._last_tf_stamp = -math.inf
         self._last_clock = now
         try:
             scan = scan_data(msg)
             odom = self._lookup(self.config.odom_frame, self.config.base_frame, msg.header.stamp)
-            slam = self._slam_for(msg.header.frame_id, msg.header.stamp)
+            mounting = self._mounting(msg.header.frame_id, msg.header.stamp)
             with self._lock:
-                done = slam.add_scan(odom, scan, stamp)
+                if self._slam is None:
+                    # The first usable scan's frame is the laser's; others are mapped with their own mounting.
+                    self._slam = Slam(self.config.slam, mounting)
+                    self._last_map_time = -math.inf
+                done = self._slam.add_scan(odom, scan, stamp, laser_pose=mounting)
         except MrsNavError as err:
-            rospy.logwarn_throttle(5.0, f"slam: skipping scan at {stamp:.3f}: {err}")
+            rospy.logwarn_throttle(5.0, f"slam: skipping scan at {stamp:.3f} (frame {msg.header.frame_id!r}): {err}")
             return
         except (tf2_ros.LookupException, tf2_ros.ConnectivityException, tf2_ros.ExtrapolationException) as err:
-            rospy.logwarn_throttle(5.0, f"slam: skipping scan at {stamp:.3f}, no transform: {err}")
+            rospy.logwarn_throttle(
+                5.0, f"slam: skipping scan at {stamp:.3f} (frame {msg.header.frame_id!r}), no transform: {err}"
+            )
             return
         # The first processed scan publishes a map at once; later ones every map_update_interval.
         if done is not None and stamp - self._last_map_time >= self.config.slam.map_update_interval:
@@ -126,17 +134,22 @@ class SlamNode:
         tf = self._buffer.lookup_transform(parent, child, stamp, rospy.Duration(self.config.tf_wait))
         return pose_from_transform(tf)
 
-    def _slam_for(self, laser_frame: str, stamp: rospy.Time) -> Slam:
-        """The SLAM instance, made at the first usable scan with the laser's mounting read from tf."""
+    def _mounting(self, frame: str, stamp: rospy.Time) -> Pose2D:
+        """base -> ``frame`` from tf (looked up once per frame: laser mountings are static)."""
+        if frame not in self._mountings:
+            self._mountings[frame] = self._lookup(self.config.base_frame, frame, stamp)
+        return self._mountings[frame]
+
+    def _reset(self, reason: str) -> None:
+        rospy.logwarn(f"slam: {reason}; starting a new map")
         with self._lock:
-            if self._slam is not None and laser_frame == self._laser_frame:
-                return self._slam
-        mounting = self._lookup(self.config.base_frame, laser_frame, stamp)
-        with self._lock:
-            self._slam = Slam(self.config.slam, mounting)
-            self._laser_frame = laser_frame
-            self._last_map_time = -math.inf
-            return self._slam
+            self._slam = None
+            self._mountings.clear()
+        self._last_tf_stamp = -math.inf
+
+    def _on_reset(self, _request: EmptyRequest) -> EmptyResponse:
+        self._reset("reset requested on ~reset")
+        return EmptyResponse()
 
     # -- outputs --------------------------------------------------------------------------------------------------
 

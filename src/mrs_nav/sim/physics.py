@@ -25,7 +25,7 @@ import ode
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
-from mrs_nav.maps.world import World
+from mrs_nav.maps.world import Box, World
 from mrs_nav.sim.ode_bindings import (
     CONTACT_APPROX1,
     CONTACT_SOFT_CFM,
@@ -87,14 +87,18 @@ class Physics:
 
     def _add_obstacles(self, world: World) -> None:
         for box in world.boxes:
-            geom = ode.GeomBox(self.obstacle_space, (box.size_x, box.size_y, box.size_z))
-            geom.setPosition((box.x, box.y, box.z))
-            geom.setRotation(_rotation_z(box.yaw))
-            self._obstacles[geom] = box.name
+            self.add_box(box)
         for cyl in world.cylinders:
             geom = ode.GeomCylinder(self.obstacle_space, cyl.radius, cyl.length)  # axis along z
             geom.setPosition((cyl.x, cyl.y, cyl.z))
             self._obstacles[geom] = cyl.name
+
+    def add_box(self, box: Box) -> None:
+        """Put a static box into the world (the laser sees it from the next scan)."""
+        geom = ode.GeomBox(self.obstacle_space, (box.size_x, box.size_y, box.size_z))
+        geom.setPosition((box.x, box.y, box.z))
+        geom.setRotation(_rotation_z(box.yaw))
+        self._obstacles[geom] = box.name
 
     def _build_robot(self, start: Pose2D) -> None:
         p = self.params
@@ -209,6 +213,38 @@ class Physics:
         vx, vy, _ = self.chassis.getRelPointVel((-self.params.com_x, 0.0, 0.0))
         yaw = self.pose().yaw
         return (vx * math.cos(yaw) + vy * math.sin(yaw), self.chassis.getAngularVel()[2])
+
+    def move_robot(self, pose: Pose2D) -> None:
+        """Teleport the robot, at rest, so that ``base_footprint`` is at ``pose`` (the kidnapped-robot test).
+
+        Every body is moved by the same planar rigid motion, so the wheels keep their hinge angles and the wheel
+        odometry sees no motion at all. A pose overlapping an obstacle raises InvalidInputError and leaves the
+        robot where it was.
+        """
+        before = self.pose()
+        motion = pose.compose(before.inverse())
+
+        def apply(m: Pose2D) -> None:
+            turn = _rotation_z(m.yaw)
+            c, s = math.cos(m.yaw), math.sin(m.yaw)
+            for body in (self.chassis, *self._wheel_bodies):
+                x, y, z = body.getPosition()
+                body.setPosition((m.x + c * x - s * y, m.y + s * x + c * y, z))
+                r = body.getRotation()
+                body.setRotation(
+                    tuple(sum(turn[3 * i + k] * r[3 * k + j] for k in range(3)) for i in range(3) for j in range(3))
+                )
+                body.setLinearVel((0.0, 0.0, 0.0))
+                body.setAngularVel((0.0, 0.0, 0.0))
+
+        apply(motion)
+        touching = self._touching_obstacles()
+        if touching:
+            apply(motion.inverse())
+            raise InvalidInputError(
+                f"pose ({pose.x:.3f}, {pose.y:.3f}) of a robot of radius {self.params.footprint_radius} m overlaps "
+                f"{', '.join(sorted(touching))}"
+            )
 
     def height(self) -> float:
         """Height (m) of the chassis centre: stays near its start unless the robot climbs or sinks."""

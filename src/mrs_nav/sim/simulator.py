@@ -14,14 +14,14 @@ this class.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D, wrap_angle
 from mrs_nav.limits import MAX_COORDINATE_M, MAX_SHAPES
-from mrs_nav.maps.world import World
+from mrs_nav.maps.world import Box, World
 from mrs_nav.sim.commands import CommandLimiter, Twist2D
 from mrs_nav.sim.laser import Laser, LaserParams, Scan
 from mrs_nav.sim.odometry import Odometry, WheelOdometry
@@ -126,6 +126,15 @@ class Simulator:
         """
         return self._limiter.receive(v, omega, self.time)
 
+    def add_box(self, box: Box) -> None:
+        """Put a static box into the world at run time (an obstacle the map does not have); it joins
+        :attr:`world`. Raises :class:`InvalidInputError` for a box without finite numbers and positive sizes."""
+        numbers = (box.x, box.y, box.z, box.yaw, box.size_x, box.size_y, box.size_z)
+        if not all(math.isfinite(v) for v in numbers) or min(box.size_x, box.size_y, box.size_z) <= 0.0:
+            raise InvalidInputError(f"box {box.name!r}: pose and sizes must be finite, sizes > 0, got {box}")
+        self._physics.add_box(box)
+        self.world = replace(self.world, boxes=(*self.world.boxes, box))
+
     def step(self) -> Scan | None:
         """Advance one physics step; returns the scan taken at the end of it, if one was due."""
         dt = self.config.dt
@@ -168,6 +177,13 @@ class Simulator:
             if scan is not None:
                 scans.append(scan)
         return scans
+
+    def teleport(self, pose: Pose2D) -> None:
+        """Put the robot, stopped, at ``pose`` (world frame) without its odometry noticing: a kidnapping.
+
+        Raises InvalidInputError if the robot would overlap an obstacle there (it then stays where it was).
+        """
+        self._physics.move_robot(pose)
 
     # -- reading ------------------------------------------------------------------------------------------------
 

@@ -1,27 +1,89 @@
 """SLAM parameters, named and meant as in ROS gmapping (``slam_gmapping``) where the meaning is the same.
 
-Units: metres, radians, seconds. A value that makes no sense raises :class:`InvalidInputError` naming it.
+Units: metres, radians, seconds. One set of defaults: ``config/slam.yaml``, which the SLAM node loads as its
+private parameters and :class:`SlamConfig` reads for its field defaults, so the node, ``mrs-nav replay`` and
+the benchmarks start from the same values. Range-dependent choices follow the scan: ``maxUrange`` 0 means the
+scan's own ``range_max``.
+
+Every value is checked against the stated range in :data:`LIMITS` (a value outside raises
+:class:`InvalidInputError` naming it), and the initial map extent against :data:`MAX_MAP_CELLS`, before
+anything is allocated.
 """
 
 from __future__ import annotations
 
 import builtins
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
 
+import yaml
+
 from mrs_nav.errors import InvalidInputError
+from mrs_nav.resources import CONFIG_DIR
+
+DEFAULTS_FILE = CONFIG_DIR / "slam.yaml"
+# Cells of the occupancy grid at most (16 bytes each: log-odds, mean hit offset, hit count): 400 MB, e.g.
+# 1 km x 1 km at 20 cm or 316 m x 316 m at 5 cm. The map grows only where scans reach; past this it refuses.
+MAX_MAP_CELLS = 25_000_000
+MAX_COORDINATE_M = 100_000.0  # m: a map frame coordinate farther out than 100 km is an error, not a building
+
+# (lowest, highest) accepted value of each numeric parameter, with its unit in the field documentation.
+LIMITS: dict[builtins.str, tuple[float, float]] = {
+    "delta": (0.01, 1.0),
+    "maxUrange": (0.0, 1000.0),
+    "maxRange": (0.0, 1000.0),
+    "linearUpdate": (0.0, 100.0),
+    "angularUpdate": (0.0, math.pi),
+    "temporalUpdate": (-1.0, 3600.0),
+    "map_update_interval": (0.01, 3600.0),
+    "xmin": (-MAX_COORDINATE_M, MAX_COORDINATE_M),
+    "ymin": (-MAX_COORDINATE_M, MAX_COORDINATE_M),
+    "xmax": (-MAX_COORDINATE_M, MAX_COORDINATE_M),
+    "ymax": (-MAX_COORDINATE_M, MAX_COORDINATE_M),
+    "lfree": (0.01, 100.0),
+    "loccupied": (0.01, 100.0),
+    "lmax": (0.1, 100.0),
+    "search_linear": (0.0, 2.0),
+    "search_angular": (0.0, math.pi),
+    "srr": (0.0, 10.0),
+    "srt": (0.0, 10.0),
+    "str": (0.0, 10.0),
+    "stt": (0.0, 10.0),
+    "sigma": (0.005, 1.0),
+}
+
+
+@functools.cache
+def shipped_defaults() -> dict[builtins.str, Any]:
+    """The SLAM parameters of ``config/slam.yaml`` (the node's frames and timing there are not SLAM's)."""
+    try:
+        values = yaml.safe_load(DEFAULTS_FILE.read_text(encoding="utf-8"))
+    except (OSError, yaml.YAMLError) as err:
+        raise InvalidInputError(f"cannot read the SLAM defaults {DEFAULTS_FILE}: {err}") from None
+    if not isinstance(values, dict):
+        raise InvalidInputError(f"SLAM defaults {DEFAULTS_FILE} is not a mapping")
+    return values
+
+
+def _default(name: builtins.str) -> Any:
+    values = shipped_defaults()
+    if name not in values:
+        raise InvalidInputError(f"SLAM defaults {DEFAULTS_FILE} lack {name}")
+    return values[name]
 
 
 @dataclass(frozen=True)
 class SlamConfig:
-    """Parameters of :class:`mrs_nav.slam.Slam`.
+    """Parameters of :class:`mrs_nav.slam.Slam`; defaults from ``config/slam.yaml``.
 
     Attributes (gmapping's names):
         delta: map resolution, metres per cell.
-        maxUrange: usable laser range, metres. Longer readings only clear free space up to this distance;
-            their end points are not marked occupied.
+        maxUrange: usable laser range, metres; ``0`` means the scan's ``range_max`` (so one default serves a
+            3.5 m LDS and an 80 m SICK). Longer readings only clear free space up to this distance; their end
+            points are not marked occupied.
         maxRange: readings at or beyond this (or the scan's own ``range_max``) are "no return" and ignored,
             as in gmapping. ``0`` means use the scan's ``range_max``.
         linearUpdate, angularUpdate: process a scan once the robot has travelled this far (m) or turned this
@@ -41,47 +103,52 @@ class SlamConfig:
         sigma: standard deviation of the likelihood field (m) used to score a scan against the map.
     """
 
-    delta: float = 0.05
-    maxUrange: float = 80.0  # noqa: N815 - gmapping's parameter name
-    maxRange: float = 0.0  # noqa: N815
-    linearUpdate: float = 0.2  # noqa: N815
-    angularUpdate: float = 0.2  # noqa: N815
-    temporalUpdate: float = -1.0  # noqa: N815
-    map_update_interval: float = 2.0
-    xmin: float = -10.0
-    ymin: float = -10.0
-    xmax: float = 10.0
-    ymax: float = 10.0
-    map_grows: bool = True
-    lfree: float = 0.4
-    loccupied: float = 0.9
-    lmax: float = 8.0
-    search_linear: float = 0.3
-    search_angular: float = 0.5
-    srr: float = 0.1
-    srt: float = 0.2
-    str: float = 0.1  # gmapping's name; annotations in this class say builtins.str for the type
-    stt: float = 0.2
-    sigma: float = 0.05
+    delta: float = _default("delta")
+    maxUrange: float = _default("maxUrange")  # noqa: N815 - gmapping's parameter name
+    maxRange: float = _default("maxRange")  # noqa: N815
+    linearUpdate: float = _default("linearUpdate")  # noqa: N815
+    angularUpdate: float = _default("angularUpdate")  # noqa: N815
+    temporalUpdate: float = _default("temporalUpdate")  # noqa: N815
+    map_update_interval: float = _default("map_update_interval")
+    xmin: float = _default("xmin")
+    ymin: float = _default("ymin")
+    xmax: float = _default("xmax")
+    ymax: float = _default("ymax")
+    map_grows: bool = _default("map_grows")
+    lfree: float = _default("lfree")
+    loccupied: float = _default("loccupied")
+    lmax: float = _default("lmax")
+    search_linear: float = _default("search_linear")
+    search_angular: float = _default("search_angular")
+    srr: float = _default("srr")
+    srt: float = _default("srt")
+    str: float = _default("str")  # gmapping's name; annotations in this class say builtins.str for the type
+    stt: float = _default("stt")
+    sigma: float = _default("sigma")
 
     def __post_init__(self) -> None:
-        for field in dataclasses.fields(self):
-            value = getattr(self, field.name)
-            if isinstance(value, float) and not math.isfinite(value):
-                raise InvalidInputError(f"SLAM parameter {field.name} must be finite, got {value}")
-        positive = ("delta", "maxUrange", "lfree", "loccupied", "lmax", "sigma", "map_update_interval")
-        for name in positive:
-            if getattr(self, name) <= 0.0:
-                raise InvalidInputError(f"SLAM parameter {name} must be > 0, got {getattr(self, name)}")
-        non_negative: tuple[builtins.str, ...] = ("maxRange", "linearUpdate", "angularUpdate", "search_linear")
-        non_negative += ("search_angular", "srr", "srt", "str", "stt")
-        for name in non_negative:
-            if getattr(self, name) < 0.0:
-                raise InvalidInputError(f"SLAM parameter {name} must be >= 0, got {getattr(self, name)}")
-        if self.delta > 1.0:
-            raise InvalidInputError(f"SLAM parameter delta (map resolution) must be <= 1 m, got {self.delta}")
+        for name, (low, high) in LIMITS.items():
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise InvalidInputError(f"SLAM parameter {name} must be a number, got {value!r}")
+            if not (math.isfinite(value) and low <= value <= high):
+                raise InvalidInputError(f"SLAM parameter {name} must be in {low:g}..{high:g}, got {value}")
+        if not isinstance(self.map_grows, bool):
+            raise InvalidInputError(f"SLAM parameter map_grows must be true or false, got {self.map_grows!r}")
         if self.xmax - self.xmin < self.delta or self.ymax - self.ymin < self.delta:
             raise InvalidInputError(f"SLAM map extent is empty: x {self.xmin}..{self.xmax}, y {self.ymin}..{self.ymax}")
+        cells = math.ceil((self.xmax - self.xmin) / self.delta + 1) * math.ceil(
+            (self.ymax - self.ymin) / self.delta + 1
+        )
+        if cells > MAX_MAP_CELLS:
+            raise InvalidInputError(
+                f"SLAM map extent x {self.xmin:g}..{self.xmax:g}, y {self.ymin:g}..{self.ymax:g} m at delta "
+                f"{self.delta:g} m needs {cells:.3g} cells, more than the limit of {MAX_MAP_CELLS:,}"
+            )
+
+    def usable_range(self, range_max: float) -> float:
+        """maxUrange for a scan whose ``range_max`` is given (``maxUrange`` 0: that ``range_max``)."""
+        return range_max if self.maxUrange <= 0.0 else self.maxUrange
 
     @classmethod
     def from_assignments(cls, items: list[builtins.str]) -> SlamConfig:

@@ -6,7 +6,11 @@ Each processed scan adds ``loccupied`` to the log-odds of the cells holding beam
 point is never cleared by the same scan, so the update does not depend on the angular density of the laser.
 
 Like gmapping's point accumulator, each cell also keeps the mean of the end points that fell in it, so the scan
-matcher can align to where obstacles were seen rather than to cell centres (sub-cell accuracy).
+matcher can align to where obstacles were seen rather than to cell centres (sub-cell accuracy). The sums are of
+offsets from the cell's corner, so float32 keeps them exact to micrometres: 16 bytes a cell in all.
+
+The grid covers the bounding box of what scans have reached (plus a growth margin), never more than
+``max_cells`` cells: growth past that raises :class:`InvalidInputError` before anything is allocated.
 
 Cells are indexed ``[row, col] = [iy, ix]``; cell ``(ix, iy)`` covers
 ``[origin_x + ix * resolution, origin_x + (ix + 1) * resolution)`` and likewise in y.
@@ -42,6 +46,7 @@ class LogOddsGrid:
         lfree: float = 0.4,
         loccupied: float = 0.9,
         lmax: float = 8.0,
+        max_cells: int = 25_000_000,
     ) -> None:
         xmin, ymin, xmax, ymax = extent
         if resolution <= 0.0 or xmax <= xmin or ymax <= ymin:
@@ -51,14 +56,17 @@ class LogOddsGrid:
         self.lfree = lfree
         self.loccupied = loccupied
         self.lmax = lmax
+        self.max_cells = max_cells
         self.origin_x = math.floor(xmin / resolution) * resolution
         self.origin_y = math.floor(ymin / resolution) * resolution
         width = math.ceil((xmax - self.origin_x) / resolution)
         height = math.ceil((ymax - self.origin_y) / resolution)
+        if width * height > max_cells:
+            raise InvalidInputError(f"occupancy grid of {width} x {height} cells exceeds the limit of {max_cells:,}")
         self.logodds = np.zeros((height, width), dtype=np.float32)
-        # Sum of end point coordinates (m) and end point count per cell, for the mean hit point.
-        self.hit_sum = np.zeros((2, height, width), dtype=np.float64)
-        self.hit_count = np.zeros((height, width), dtype=np.float64)
+        # Sum of end point offsets from the cell's corner (m) and end point count per cell, for the mean hit.
+        self.hit_sum = np.zeros((2, height, width), dtype=np.float32)
+        self.hit_count = np.zeros((height, width), dtype=np.float32)
 
     @property
     def width(self) -> int:
@@ -91,9 +99,18 @@ class LogOddsGrid:
         top = max(0, math.ceil((ymax - (self.origin_y + self.height * res)) / res) + 1)
         if left == bottom == right == top == 0:
             return
-        margin = max(int(5.0 / res), self.width // 4, self.height // 4)
-        pad = [(bottom + margin if bottom else 0, top + margin if top else 0)]
-        pad.append((left + margin if left else 0, right + margin if right else 0))
+        # A margin so that a slowly growing map is not copied every scan; dropped near the cell limit.
+        for margin in (max(int(5.0 / res), self.width // 4, self.height // 4), 0):
+            pad = [(bottom + margin if bottom else 0, top + margin if top else 0)]
+            pad.append((left + margin if left else 0, right + margin if right else 0))
+            cells = (self.height + sum(pad[0])) * (self.width + sum(pad[1]))
+            if cells <= self.max_cells:
+                break
+        else:
+            raise InvalidInputError(
+                f"the map would grow to {cells:.3g} cells to hold x {xmin:.6g}..{xmax:.6g}, "
+                f"y {ymin:.6g}..{ymax:.6g} m, more than the limit of {self.max_cells:,}"
+            )
         self.logodds = np.pad(self.logodds, pad)
         self.hit_sum = np.pad(self.hit_sum, [(0, 0), *pad])
         self.hit_count = np.pad(self.hit_count, pad)
@@ -131,8 +148,10 @@ class LogOddsGrid:
         occ_ix, occ_iy = self.cell_of(ends_x[:n_hit], ends_y[:n_hit])
         keep = (occ_ix >= 0) & (occ_ix < self.width) & (occ_iy >= 0) & (occ_iy < self.height)
         occ_ix, occ_iy = occ_ix[keep], occ_iy[keep]
-        np.add.at(self.hit_sum[0], (occ_iy, occ_ix), ends_x[:n_hit][keep])
-        np.add.at(self.hit_sum[1], (occ_iy, occ_ix), ends_y[:n_hit][keep])
+        corner_x = self.origin_x + occ_ix * res
+        corner_y = self.origin_y + occ_iy * res
+        np.add.at(self.hit_sum[0], (occ_iy, occ_ix), ends_x[:n_hit][keep] - corner_x)
+        np.add.at(self.hit_sum[1], (occ_iy, occ_ix), ends_y[:n_hit][keep] - corner_y)
         np.add.at(self.hit_count, (occ_iy, occ_ix), 1.0)
         self._apply(free_ix, free_iy, occ_ix, occ_iy)
 
@@ -158,13 +177,12 @@ class LogOddsGrid:
 
     def mean_hits(self, iy: IntArray, ix: IntArray) -> tuple[FloatArray, FloatArray]:
         """Mean end point (m) of cells ``(iy, ix)``; the cell centre where nothing was hit."""
-        count = self.hit_count[iy, ix]
-        centre_x = self.origin_x + (ix + 0.5) * self.resolution
-        centre_y = self.origin_y + (iy + 0.5) * self.resolution
+        count = self.hit_count[iy, ix].astype(np.float64)
+        res = self.resolution
         safe = np.maximum(count, 1.0)
-        x = np.where(count > 0, self.hit_sum[0, iy, ix] / safe, centre_x)
-        y = np.where(count > 0, self.hit_sum[1, iy, ix] / safe, centre_y)
-        return x, y
+        dx = np.where(count > 0, self.hit_sum[0, iy, ix] / safe, 0.5 * res)
+        dy = np.where(count > 0, self.hit_sum[1, iy, ix] / safe, 0.5 * res)
+        return self.origin_x + ix * res + dx, self.origin_y + iy * res + dy
 
     def occupied(self) -> npt.NDArray[np.bool_]:
         """Cells that are more likely occupied than free (what the scan matcher aligns to)."""

@@ -16,6 +16,8 @@ import numpy as np
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray
 
+MAX_BEAMS = 100_000  # beams per scan; 2-D lasers give at most a few thousand
+
 
 @dataclass(frozen=True)
 class LaserScanData:
@@ -48,9 +50,18 @@ class LaserScanData:
         ranges: FloatArray,
     ) -> LaserScanData:
         """A scan from the fields of a ``sensor_msgs/LaserScan``, rejecting ranges that do not fit its angles."""
-        if angle_increment == 0.0 or not math.isfinite(angle_increment):
+        for name, value in (("angle_min", angle_min), ("angle_max", angle_max), ("angle_increment", angle_increment)):
+            if not math.isfinite(value):
+                raise InvalidInputError(f"laser scan {name} must be finite, got {value}")
+        if angle_increment == 0.0:
             raise InvalidInputError(f"laser scan has angle_increment {angle_increment}")
-        expected = round((angle_max - angle_min) / angle_increment) + 1
+        span = (angle_max - angle_min) / angle_increment
+        if not -1.0 < span < MAX_BEAMS:
+            raise InvalidInputError(
+                f"laser scan angles {angle_min:.4g}..{angle_max:.4g} step {angle_increment:.4g} make {span:.3g} beams, "
+                f"not 1..{MAX_BEAMS}"
+            )
+        expected = round(span) + 1
         if ranges.size != expected:
             raise InvalidInputError(
                 f"laser scan has {ranges.size} ranges but its angles {angle_min:.4f}..{angle_max:.4f} "

@@ -16,8 +16,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D
-from mrs_nav.slam.config import SlamConfig
+from mrs_nav.slam.config import MAX_COORDINATE_M, MAX_MAP_CELLS, SlamConfig
 from mrs_nav.slam.grid import LogOddsGrid
 from mrs_nav.slam.matcher import DistanceField, MatchResult, ScanMatcher, thin_points
 from mrs_nav.slam.scan import BeamSplit, LaserScanData, split_beams
@@ -54,6 +55,7 @@ class Slam:
             lfree=c.lfree,
             loccupied=c.loccupied,
             lmax=c.lmax,
+            max_cells=MAX_MAP_CELLS,
         )
         self.matcher = ScanMatcher(c.sigma, c.search_linear, c.search_angular)
         # Every processed scan, for offline use (replay's trajectory); ``history`` keeps only that many of the
@@ -81,22 +83,34 @@ class Slam:
             return True
         return c.temporalUpdate > 0.0 and stamp - last.stamp >= c.temporalUpdate
 
-    def add_scan(self, odom: Pose2D, scan: LaserScanData, stamp: float) -> ProcessedScan | None:
-        """Process a scan taken at odometry pose ``odom`` if the gates allow; return what was done or None."""
+    def add_scan(
+        self, odom: Pose2D, scan: LaserScanData, stamp: float, laser_pose: Pose2D | None = None
+    ) -> ProcessedScan | None:
+        """Process a scan taken at odometry pose ``odom`` if the gates allow; return what was done or None.
+
+        ``laser_pose``: base -> laser of this scan when it is not the usual mounting (a scan in another frame).
+        Raises InvalidInputError, with the state unchanged, when the pose is far outside any building or the map
+        would grow past its cell limit.
+        """
+        mount = laser_pose or self.laser_pose
         if not self.wants(odom, stamp):
             return None
         c = self.config
-        beams = split_beams(scan, c.maxUrange, c.maxRange)
+        beams = split_beams(scan, c.usable_range(scan.range_max), c.maxRange)
         predicted = self.pose_at(odom)
+        if max(abs(predicted.x), abs(predicted.y)) > MAX_COORDINATE_M:
+            raise InvalidInputError(
+                f"odometry pose ({odom.x:.6g}, {odom.y:.6g}) puts the robot beyond {MAX_COORDINATE_M:g} m in the map"
+            )
         match = None
         points = _points(beams)
         if self.processed and points.shape[0] >= MIN_POINTS:
-            sensor_prior = predicted.compose(self.laser_pose)
+            sensor_prior = predicted.compose(mount)
             match = self._match(points, sensor_prior, self._spread(odom))
-            pose = match.pose.compose(self.laser_pose.inverse())
+            pose = match.pose.compose(mount.inverse())
         else:
             pose = predicted
-        self.grid.integrate(pose.compose(self.laser_pose), beams)
+        self.grid.integrate(pose.compose(mount), beams)
         self._map_to_odom = pose.compose(odom.inverse())
         record = ProcessedScan(stamp, pose, odom, match)
         self.processed.append(record)

@@ -37,11 +37,14 @@ from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.occupancy_grid import BoolArray, OccupancyGrid
 from mrs_nav.planning import PlanResult, path_length
 from mrs_nav.trees import arcs
+from mrs_nav.trees.guide import CorridorSampler
 from mrs_nav.trees.rrt import check_budget, check_query, failed, sample_random_position
 from mrs_nav.trees.tree import ArcTree, Search
 
 # Costs closer than this (metres) count as equal.
 _EPS = 1e-9
+# How many nearest nodes a guided target may be steered from.
+_AHEAD_CANDIDATES = 8
 
 
 @dataclass(frozen=True)
@@ -57,11 +60,17 @@ class RRTStarConfig:
     informed: bool = True
     gamma: float | None = None
     stop_at_first: bool = False
+    guide_bias: float = 0.7
+    guide_cell: float = 0.2
 
     def __post_init__(self) -> None:
         check_budget(self.iterations, self.time_budget)
-        if not 0.0 <= self.goal_bias <= 1.0:
-            raise InvalidInputError(f"goal_bias must lie in [0, 1], got {self.goal_bias}")
+        if not (0.0 <= self.goal_bias <= 1.0 and 0.0 <= self.guide_bias <= 1.0 - self.goal_bias):
+            raise InvalidInputError(
+                f"need goal_bias and guide_bias >= 0 with a sum <= 1, got {self.goal_bias}, {self.guide_bias}"
+            )
+        if not (math.isfinite(self.guide_cell) and self.guide_cell > 0.0):
+            raise InvalidInputError(f"guide_cell must be positive, got {self.guide_cell}")
         if not (math.isfinite(self.step) and self.step > 0.0):
             raise InvalidInputError(f"step must be positive, got {self.step}")
         if not 0.0 < self.max_alpha <= math.pi / 2:
@@ -127,11 +136,20 @@ class _Planner:
         """Feasible and collision-free mask of a batch."""
         return arcs.checked(batch, self.grid, self.config.max_alpha, self.config.min_turning_radius)
 
-    def extend(self, target: FloatArray) -> int:
-        """Steps 2-4 towards ``target``; returns the new node's id or -1."""
+    def extend(self, target: FloatArray, ahead: bool = False) -> int:
+        """Steps 2-4 towards ``target``; returns the new node's id or -1.
+
+        With ``ahead``, the step starts from the nearest of the few nearest nodes that faces the target (a
+        guided target lies ahead of the frontier, and a node facing away from it cannot reach it by an arc).
+        """
         tree = self.tree
-        ids, dist = tree.nearest(target, 1)
-        nearest, d = int(ids[0]), float(dist[0])
+        ids, dist = tree.nearest(target, _AHEAD_CANDIDATES if ahead else 1)
+        k = 0
+        if ahead:
+            delta = target - tree.position[ids]
+            facing = np.cos(tree.yaw[ids]) * delta[:, 0] + np.sin(tree.yaw[ids]) * delta[:, 1] > 0.0
+            k = int(np.argmax(facing))
+        nearest, d = int(ids[k]), float(dist[k])
         if d <= _EPS:
             return -1
         x_new = (
@@ -254,20 +272,37 @@ def grow_rrt_star(
     best_cost = math.inf
     best_path: FloatArray | None = None
     informed: InformedSampler | None = None
+    guide = (
+        CorridorSampler.towards(
+            grid, start.position, goal, cell_m=config.guide_cell, lookahead=config.step, spread=config.guide_cell
+        )
+        if config.guide_bias > 0.0
+        else None
+    )
+    guide_bias = config.guide_bias if guide is not None else 0.0
     history: list[tuple[int, float, float]] = []
     first_s: float | None = None
     iteration = 0
     while iteration < limit and clock() < deadline:
         iteration += 1
-        if planner.goal_node < 0 and rng.random() < config.goal_bias:
+        draw = rng.random() if planner.goal_node < 0 else 1.0
+        ahead = False
+        # While the guide is on and the tree is far from the goal, goal samples go to the guide: a step towards a
+        # goal behind walls fails, and the corridor leads there anyway.
+        if draw < config.goal_bias and not (guide is not None and guide.frontier > 2.0 * config.step):
             target = goal.copy()
+        elif guide is not None and draw < config.goal_bias + guide_bias:
+            target = guide.sample(rng)
+            ahead = True
         elif informed is not None:
             target = informed.sample(rng)
         else:
             target = sample_random_position(grid, rng)
-        new = planner.extend(target)
+        new = planner.extend(target, ahead)
         if new < 0:
             continue
+        if guide is not None:
+            guide.reached(tree.position[new])
         planner.try_goal(new)
         g = planner.goal_node
         if g >= 0 and tree.cost[g] < best_cost - _EPS:

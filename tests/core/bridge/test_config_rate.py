@@ -17,8 +17,12 @@ def test_defaults_are_loopback_peer_with_nothing_inbound() -> None:
     assert (config.mode, config.listen, config.connect) == ("peer", ("tcp/127.0.0.1:7447",), ())
     assert config.inbound == ()
     assert config.key_prefix == "mrs_nav"
-    settings = config.zenoh_settings()
+    settings = config.zenoh_settings({})
     assert settings["scouting/multicast/enabled"] is False
+    # The bridge's access control is on: remote sessions may observe, and put on nothing.
+    acl = settings["access_control"]
+    assert (acl["enabled"], acl["default_permission"]) == (True, "deny")
+    assert [r["id"] for r in acl["rules"]] == ["bridge_out", "observe"]
     assert config.topics.accepts("/odom")
     assert not config.topics.accepts("/rosout")
     assert not config.topics.accepts("/clock")

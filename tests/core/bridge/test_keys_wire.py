@@ -3,13 +3,17 @@
 from __future__ import annotations
 
 import pytest
+import zenoh
 from hypothesis import given
 from hypothesis import strategies as st
 
+from mrs_nav.bridge.config import BridgeConfig
 from mrs_nav.bridge.keys import (
     KeyLayout,
+    discovery_key,
     publish_key,
     robot_prefix,
+    status_key,
     topic_key,
     topic_of_key,
     topic_of_publish_key,
@@ -45,6 +49,15 @@ def test_zenoh_bridge_ros1_layout_is_hex_type_md5_topic() -> None:
     key = topic_key("", "/odom", KeyLayout.ZENOH_BRIDGE_ROS1, "nav_msgs/Odometry", MD5)
     assert key == f"{b'nav_msgs/Odometry'.hex()}/{MD5}/odom"
     assert topic_key("ns", "/odom", KeyLayout.ZENOH_BRIDGE_ROS1, "nav_msgs/Odometry", MD5).endswith(f"{MD5}/ns/odom")
+    # zenoh-plugin-ros1 1.0.0-rc.1: ros1_discovery_info/<discovery ns>/<pub|sub|srv|cl>/<hex type>/<md5>/<bridge ns>/...
+    beacon = discovery_key("/a/odom", "nav_msgs/Odometry", MD5)
+    assert beacon == f"ros1_discovery_info/*/pub/{b'nav_msgs/Odometry'.hex()}/{MD5}/*/a/odom"
+    assert zenoh.KeyExpr(beacon).intersects(zenoh.KeyExpr("ros1_discovery_info/*/*/*/*/*/*/**"))
+    # An empty prefix is only possible with this layout, whose services then live under mrs_nav.
+    assert BridgeConfig.from_mapping({"prefix": "", "layout": "zenoh-bridge-ros1"}).key_prefix == ""
+    with pytest.raises(InvalidInputError, match="prefix is empty"):
+        BridgeConfig.from_mapping({"prefix": ""})
+    assert status_key("") == "mrs_nav/@bridge/status"
 
 
 @pytest.mark.parametrize("topic", ["odom", "/a/*", "/a//b", "/", "/a/$x", "/a b"])

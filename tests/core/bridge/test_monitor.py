@@ -17,7 +17,7 @@ from mrs_nav.bridge.config import zenoh_settings
 from mrs_nav.bridge.dashboard import render, summarise
 from mrs_nav.bridge.decoder import noetic_store
 from mrs_nav.bridge.keys import topic_key, types_key
-from mrs_nav.bridge.monitor import RemoteMonitor
+from mrs_nav.bridge.monitor import RemoteMonitor, TopicStats
 from mrs_nav.bridge.session import open_session
 from mrs_nav.bridge.snapshot import draw_snapshot
 from mrs_nav.bridge.wire import encode_attachment, encode_definition, encoding_text
@@ -52,6 +52,15 @@ def grid() -> Any:
     return T["nav_msgs/msg/OccupancyGrid"](header, info, np.array([0, 100, -1, 0] * 3, dtype=np.int8))
 
 
+def answer_types(query: zenoh.Query) -> None:
+    """Answer a ``@types`` query for odometry and occupancy grids as the bridge does."""
+    for name in ("nav_msgs/msg/Odometry", "nav_msgs/msg/OccupancyGrid"):
+        key = types_key("mrs_nav", name)
+        if zenoh.KeyExpr(key).intersects(query.key_expr):
+            text, md5 = STORE.generate_msgdef(name, ros_version=1)
+            query.reply(key, encode_definition(name, md5, text))
+
+
 class FakeBridge:
     """A Zenoh peer speaking the bridge's wire format (what zenoh_bridge does, minus ROS)."""
 
@@ -60,11 +69,7 @@ class FakeBridge:
         self.entities: list[Any] = [self.session.declare_queryable("mrs_nav/@types/**", self.answer)]
 
     def answer(self, query: zenoh.Query) -> None:
-        for name in ("nav_msgs/msg/Odometry", "nav_msgs/msg/OccupancyGrid"):
-            key = types_key("mrs_nav", name)
-            if zenoh.KeyExpr(key).intersects(query.key_expr):
-                text, md5 = STORE.generate_msgdef(name, ros_version=1)
-                query.reply(key, encode_definition(name, md5, text))
+        answer_types(query)
 
     def publisher(self, topic: str, type_name: str, latched: bool) -> Any:
         key = topic_key("mrs_nav", topic)
@@ -134,3 +139,21 @@ def test_send_goal_without_a_bridge_says_nobody_answered(bridge: tuple[FakeBridg
         accepted, answer = monitor.send_goal(1.0, 2.0, 0.0)
     assert not accepted
     assert "no bridge" in answer
+
+
+def test_a_topic_is_stale_without_its_publisher_or_after_three_silent_periods() -> None:
+    stats = TopicStats(alive=True, received_ns=10_000_000_000)
+    stats.arrivals.extend([0.0, 0.1, 0.2])  # 10 Hz
+    assert stats.age_s(10_250_000_000) == pytest.approx(0.25)
+    assert not stats.stale(0.25, 10_250_000_000)
+    assert stats.stale(0.6, 10_400_000_000)  # 0.4 s silent > 3 periods of 0.1 s
+    latched = TopicStats(alive=True, received_ns=1_000_000_000)
+    latched.arrivals.append(0.0)  # one cached map, 34 s old but its publisher lives: live, with its age shown
+    assert not latched.stale(34.0, 35_000_000_000)
+    assert latched.age_s(35_000_000_000) == pytest.approx(34.0)
+    latched.alive = False  # the token went with the publisher
+    assert latched.stale(34.0, 35_000_000_000)
+    summary = summarise({}, {"/map": latched}, 34.0, 35_000_000_000)
+    assert summary["topics"]["/map"]["stale"] is True
+    assert summary["topics"]["/map"]["age_s"] == pytest.approx(34.0)
+    assert "STALE" in render(summary)

@@ -8,7 +8,9 @@ import pytest
 
 from mrs_nav.cli.main import main
 
-INTEL = Path(__file__).resolve().parents[4] / "shared" / "data" / "intel-corrected.log.gz"
+# The shared data folder beside the checkout (or beside the folder of worktrees).
+SHARED = [p / "shared" / "data" for p in Path(__file__).resolve().parents if (p / "shared").is_dir()]
+INTEL = (SHARED[0] if SHARED else Path()) / "intel-corrected.log.gz"
 SCANS = 120
 
 
@@ -40,6 +42,7 @@ def test_carmen2bag_then_replay(excerpt, tmp_path, capsys):
     summary = json.loads(capsys.readouterr().out)
     assert set(summary) == {
         "scans",
+        "scans_skipped",
         "ms_per_scan_median",
         "ms_per_scan_p95",
         "realtime_factor",
@@ -61,9 +64,10 @@ def test_carmen2bag_then_replay(excerpt, tmp_path, capsys):
 
 def test_odometry_noise_is_seeded(excerpt, tmp_path):
     a, b, c = (tmp_path / f"{n}.bag" for n in "abc")
-    assert main(["carmen2bag", str(excerpt), str(a), "--seed", "1"]) == 0
-    assert main(["carmen2bag", str(excerpt), str(b), "--seed", "1"]) == 0
-    assert main(["carmen2bag", str(excerpt), str(c), "--seed", "2"]) == 0
+    synthetic = ["--odom", "synthetic"]
+    assert main(["carmen2bag", str(excerpt), str(a), "--seed", "1", *synthetic]) == 0
+    assert main(["carmen2bag", str(excerpt), str(b), "--seed", "1", *synthetic]) == 0
+    assert main(["carmen2bag", str(excerpt), str(c), "--seed", "2", *synthetic]) == 0
     assert a.read_bytes() == b.read_bytes()
     assert a.read_bytes() != c.read_bytes()
 
@@ -73,8 +77,9 @@ def test_odometry_noise_is_seeded(excerpt, tmp_path):
     [
         (["carmen2bag", "missing.log", "x.bag"], "cannot read CARMEN log missing.log"),
         (["carmen2bag", "{log}", "x.bag", "--odom-noise", "1,2"], "--odom-noise: expected 4 numbers"),
+        (["carmen2bag", "{log}", "x.bag", "--odom-noise", "0,0,0,0"], "--odom-noise applies to --odom synthetic"),
         (["replay", "missing.bag", "--slam"], "bag missing.bag does not exist"),
-        (["replay", "{bag}", "--slam", "--param", "delta=-1"], "delta must be > 0"),
+        (["replay", "{bag}", "--slam", "--param", "delta=-1"], "delta must be in 0.01..1"),
         (["replay", "{bag}", "--slam"], "has no /scan topic"),
     ],
 )

@@ -52,16 +52,28 @@ def test_rotated_origin_rotates_the_lookup() -> None:
     assert grid.is_free([[-0.5, 0.5]]).tolist() == [True]
 
 
-def test_inflation_uses_a_disk_kernel_and_keeps_unknown_not_free() -> None:
-    values = np.zeros((9, 9), dtype=np.int8)
-    values[4, 4] = OCCUPIED
+def _square_distance(points: np.ndarray, row: int, col: int, res: float) -> np.ndarray:
+    """Distance from points to the square of cell (row, col) of a grid at the origin."""
+    dx = np.maximum(np.maximum(col * res - points[:, 0], points[:, 0] - (col + 1) * res), 0.0)
+    dy = np.maximum(np.maximum(row * res - points[:, 1], points[:, 1] - (row + 1) * res), 0.0)
+    return np.asarray(np.hypot(dx, dy))
+
+
+@pytest.mark.parametrize(("radius", "res"), [(0.105, 0.05), (0.1, 0.05), (0.22, 0.1), (0.03, 0.05)])
+def test_inflation_keeps_a_disc_anywhere_in_a_free_cell_off_every_occupied_square(radius: float, res: float) -> None:
+    values = np.zeros((15, 15), dtype=np.int8)
+    values[7, 7] = OCCUPIED
     values[0, 0] = UNKNOWN
-    inflated = OccupancyGrid(values, 0.05, (0.0, 0.0, 0.0)).inflate(0.105)
-    # cells whose centre is within 0.105 m: offsets with 0.05 * hypot(i, j) <= 0.105 -> 1 + 4 + 4 + 4 = 13
-    assert int(np.count_nonzero(inflated.occupied_mask)) == 13
-    assert inflated.occupied_mask[4, 6]
-    assert inflated.occupied_mask[5, 5]
-    assert not inflated.occupied_mask[5, 6]
+    inflated = OccupancyGrid(values, res, (0.0, 0.0, 0.0)).inflate(radius)
+    rng = np.random.default_rng(0)
+    for row, col in zip(*np.nonzero(inflated.free_mask), strict=True):
+        points = (np.array([col, row]) + rng.random((64, 2))) * res
+        corners = (np.array([col, row]) + np.array([[0, 0], [0, 1], [1, 0], [1, 1]])) * res
+        assert _square_distance(np.vstack([points, corners]), 7, 7, res).min() >= radius - 1e-12
+    # Tight: from every newly blocked cell some point's disc does overlap the obstacle's square.
+    for row, col in zip(*np.nonzero(inflated.occupied_mask & ~OccupancyGrid(values, res).occupied_mask), strict=True):
+        nearest = np.clip([[7.5 * res, 7.5 * res]], [[col * res, row * res]], [[(col + 1) * res, (row + 1) * res]])
+        assert _square_distance(nearest, 7, 7, res)[0] < radius + 1e-9
     assert inflated.values[0, 0] == UNKNOWN
     assert not inflated.free_mask[0, 0]
     assert np.array_equal(OccupancyGrid(values, 0.05).inflate(0.0).values, values)
@@ -76,10 +88,11 @@ def test_bad_grids_are_rejected() -> None:
         OccupancyGrid(np.zeros((2, 2), np.int8), 0.1).inflate(-1.0)
 
 
-def test_inflating_by_a_large_radius_marks_the_disk_around_each_occupied_cell() -> None:
+def test_inflating_by_a_large_radius_marks_the_cells_whose_squares_come_within_it() -> None:
     values = np.zeros((41, 41), dtype=np.int8)
     values[20, 20] = 100
     grown = OccupancyGrid(values, 0.1, (0.0, 0.0, 0.0)).inflate(1.0)
     rows, cols = np.mgrid[0:41, 0:41]
-    expected = np.hypot(rows - 20, cols - 20) * 0.1 <= 1.0 + 1e-9
+    gap_rows, gap_cols = np.maximum(np.abs(rows - 20) - 1, 0), np.maximum(np.abs(cols - 20) - 1, 0)
+    expected = np.hypot(gap_rows, gap_cols) * 0.1 < 1.0 + 1e-9
     assert np.array_equal(grown.values == 100, expected)

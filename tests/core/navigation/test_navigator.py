@@ -21,14 +21,18 @@ from mrs_nav.navigation.navigator import (
     cell_centres,
     densify,
 )
+from mrs_nav.navigation.obstacles import return_ahead
 from mrs_nav.planning import PlanResult, headings_along, path_length
+from mrs_nav.robot import BURGER_RADIUS
 
 RES = 0.05
 
 
 def arena(unknown: bool = False) -> OccupancyGrid:
-    """A 4 m x 4 m room (walls one cell thick at the border), free inside, or unknown inside."""
+    """A 4 m x 4 m room (walls one cell thick at the border), free inside, or unknown inside but for the 0.5 m
+    around (-1.5, -1.5) that the robot has seen."""
     values = np.full((80, 80), UNKNOWN if unknown else 0, dtype=np.int8)
+    values[5:15, 5:15] = 0
     values[0, :] = values[-1, :] = values[:, 0] = values[:, -1] = OCCUPIED
     return OccupancyGrid(values, RES, (-2.0, -2.0, 0.0))
 
@@ -310,8 +314,8 @@ def test_a_robot_inside_the_inflation_of_a_wall_can_still_plan_out() -> None:
 
 
 def test_bad_configuration_is_refused() -> None:
-    with pytest.raises(InvalidInputError, match="goal_tolerance_m"):
-        NavigatorConfig(goal_tolerance_m=0.0)
+    with pytest.raises(InvalidInputError, match="approach_radius_m"):
+        NavigatorConfig(approach_radius_m=0.0)
     with pytest.raises(InvalidInputError, match="max_failed_plans"):
         NavigatorConfig(max_failed_plans=0)
 
@@ -411,3 +415,127 @@ def test_a_new_goal_discards_the_plan_in_flight_for_the_old_one() -> None:
     adopted = nav.finish_plan(new, nav.run_plan(new))
     assert adopted.path is not None
     np.testing.assert_allclose(adopted.path[-1, :2], [-1.5, 1.5])
+
+
+def test_a_goal_with_a_heading_ends_within_the_move_base_tolerances() -> None:
+    nav = Navigator(astar, seed=1)
+    nav.set_map(with_wall(arena(), -0.2, -0.2, 0.2, 0.2), 0.0)
+    assert kinds(nav.set_goal(1.5, 1.5, 0.0, yaw=math.pi / 2)) == [EventKind.ACCEPTED]
+    pose, events = drive(nav, Pose2D(-1.5, -1.5, 0.0), 120.0)
+    assert nav.state is GoalState.REACHED
+    tolerances = nav.config.approach
+    assert math.hypot(pose.x - 1.5, pose.y - 1.5) <= tolerances.xy_tolerance_m + 0.01
+    assert abs(pose.yaw - math.pi / 2) <= tolerances.yaw_tolerance_rad
+    assert "rad away" in events[-1].message
+
+
+def test_a_goal_inside_an_unseen_obstacle_is_refused() -> None:
+    values = arena().values.copy()
+    values[30:50, 30:50] = OCCUPIED  # a box whose walls were seen ...
+    values[31:49, 31:49] = UNKNOWN  # ... and its inside never
+    nav = Navigator(astar)
+    nav.set_map(OccupancyGrid(values, RES, (-2.0, -2.0, 0.0)), 0.0)
+    (event,) = nav.set_goal(0.0, 0.0, 0.0)
+    assert event.kind is EventKind.REFUSED
+    assert "inside of an obstacle" in event.message
+    assert kinds(nav.set_goal(1.5, 1.5, 0.0)) == [EventKind.ACCEPTED]
+
+
+def scan(world: OccupancyGrid, pose: Pose2D, beams: int = 180, max_range: float = 3.5):
+    """A laser scan of ``world`` from ``pose``: origin, end points and the hit mask (ray marched)."""
+    angles = pose.yaw + np.linspace(-math.pi, math.pi, beams, endpoint=False)
+    steps = np.arange(1, int(max_range / (RES / 4))) * (RES / 4)
+    xy = np.array([pose.x, pose.y])
+    ends = np.empty((beams, 2))
+    hit = np.zeros(beams, dtype=bool)
+    for i, a in enumerate(angles):
+        points = xy + steps[:, None] * [math.cos(a), math.sin(a)]
+        occupied = np.flatnonzero(world.is_occupied(points))
+        hit[i] = occupied.size > 0
+        ends[i] = points[occupied[0]] if hit[i] else points[-1]
+    return xy, ends, hit
+
+
+def drive_with_scans(nav: Navigator, world: OccupancyGrid, pose: Pose2D, seconds: float) -> tuple[Pose2D, float]:
+    """Drive as :func:`drive`, with a scan of ``world`` every 0.2 s; the final pose and the least clearance (m)
+    between the robot's centre and an obstacle of ``world``."""
+    occupied = cell_centres(world, *np.nonzero(world.occupied_mask))
+    now, least = 0.0, math.inf
+    while now < seconds and nav.state is GoalState.ACTIVE:
+        if round(now / 0.1) % 2 == 0:
+            nav.set_scan(*scan(world, pose))
+        cmd = nav.update(pose, now)
+        pose = Pose2D(
+            pose.x + cmd.u * 0.1 * math.cos(pose.yaw),
+            pose.y + cmd.u * 0.1 * math.sin(pose.yaw),
+            pose.yaw + cmd.omega * 0.1,
+        )
+        least = min(least, float(np.min(np.hypot(*(occupied - [pose.x, pose.y]).T))))
+        now += 0.1
+    return pose, least
+
+
+def test_an_obstacle_seen_but_not_on_the_map_is_planned_around_without_contact() -> None:
+    room = with_wall(arena(), -0.05, -2.0, 0.05, 0.9)  # a wall with a gap at the top ...
+    world = with_wall(with_wall(room, -0.05, 1.3, 0.05, 2.0), -1.0, -1.4, -0.8, -1.0)  # ... and a box in the way
+    mapped = with_wall(room, -0.05, 1.3, 0.05, 2.0)
+    nav = Navigator(astar, seed=2)
+    nav.set_map(mapped, 0.0)
+    nav.set_goal(-0.5, -1.2, 0.0)
+    first = nav.update(Pose2D(-1.6, -1.2, 0.0), 0.0).path
+    assert first is not None
+    assert mapped.is_free(densify(first, RES)).all()
+    pose, least = drive_with_scans(nav, world, Pose2D(-1.6, -1.2, 0.0), 120.0)
+    assert nav.state is GoalState.REACHED
+    assert least > BURGER_RADIUS
+    assert math.hypot(pose.x + 0.5, pose.y + 1.2) <= nav.config.approach.xy_tolerance_m + 0.01
+
+
+def test_marks_are_cleared_when_the_laser_sees_through() -> None:
+    nav = Navigator(astar)
+    nav.set_map(arena(), 0.0)
+    box = with_wall(arena(), 0.5, -0.1, 0.7, 0.1)
+    nav.set_scan(*scan(box, Pose2D(-1.0, 0.0, 0.0)))
+    marked = nav.marked_grid
+    assert marked is not None
+    assert marked.is_occupied(np.array([[0.52, 0.0]]))[0]
+    new = cell_centres(arena(), *np.nonzero(marked.occupied_mask & ~arena().occupied_mask))
+    assert np.all(np.abs(new - [0.6, 0.0]) <= [0.15, 0.15])  # only the box's face: range noise marks nothing
+    nav.set_scan(*scan(arena(), Pose2D(-1.0, 0.0, 0.0)))  # the box is gone
+    cleared = nav.marked_grid
+    assert cleared is not None
+    assert not cleared.occupied_mask[30:50, 40:60].any()
+
+
+def test_a_return_right_ahead_stops_the_robot_and_makes_a_new_plan() -> None:
+    nav = Navigator(astar)
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(1.5, 0.0, 0.0)
+    pose = Pose2D(-1.5, 0.0, 0.0)
+    assert nav.update(pose, 0.0).u > 0.0
+    nav.set_scan(*scan(with_wall(arena(), -1.36, -0.1, -1.3, 0.1), pose))  # 0.14 m ahead of the centre
+    cmd = nav.update(pose, 0.1)
+    assert cmd.path is not None
+    assert "(blocked)" in cmd.events[0].message  # marked: the path through it is blocked
+    for now in (0.1, 0.2, 0.3):
+        assert nav.update(pose, now).u <= 0.0  # never forward into the return
+
+
+def test_return_ahead_looks_only_into_the_robots_way() -> None:
+    pose = Pose2D(0.0, 0.0, math.pi / 2)
+    assert return_ahead(pose, np.array([[0.0, 0.15]]), 0.105, 0.05)
+    assert not return_ahead(pose, np.array([[0.0, 0.2]]), 0.105, 0.05)  # farther than radius + clearance
+    assert not return_ahead(pose, np.array([[0.0, -0.12]]), 0.105, 0.05)  # behind
+    assert not return_ahead(pose, np.array([[0.14, 0.02]]), 0.105, 0.05)  # beside, passing a wall
+
+
+def test_a_hold_from_the_caller_stops_the_robot_and_it_resumes() -> None:
+    nav = Navigator(astar)
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(1.5, 1.5, 0.0)
+    pose = Pose2D(-1.5, -1.5, 0.0)
+    assert nav.update(pose, 0.0).u > 0.0
+    held = nav.update(pose, 0.1, hold="the map->odom correction is 0.4 s old")
+    assert (held.u, held.omega) == (0.0, 0.0)
+    assert "0.4 s old" in held.events[0].message
+    assert nav.update(pose, 0.2).u > 0.0

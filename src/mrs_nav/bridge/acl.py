@@ -1,0 +1,67 @@
+"""The access control rules the bridge gives its own Zenoh session (Zenoh's ``access_control`` section).
+
+The bridge is the only writer of its robot's keys: remote sessions may subscribe, query definitions, the
+bridge's status and the late-joiner caches, and watch liveliness tokens, but the only things they may put or
+query into are the inbound keys the allow-list names, and only subjects named in ``operators`` (Zenoh
+usernames or TLS certificate common names) may do that when the list is not empty. Everything else a remote
+session sends on these keys (a forged ``/odom``, a forged liveliness token) is dropped by Zenoh at ingress,
+before it reaches the bridge or, when the bridge is the robot's router, any other subscriber.
+
+Zenoh's ``**`` never matches chunks starting with ``@``, so the advanced publishers' ``@adv`` keys and the
+bridge's ``@types`` / ``@bridge`` services are named explicitly.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import Any
+
+from mrs_nav.bridge.keys import KeyLayout, data_pattern, discovery_pattern, publish_key, services_pattern, topic_key
+
+# Zenoh's ACL message kinds (zenoh 1.x).
+_ALL = [
+    "put", "delete", "declare_subscriber", "query", "reply", "declare_queryable", "liveliness_token",
+    "declare_liveliness_subscriber", "liveliness_query",
+]  # fmt: skip
+_OBSERVE = ["declare_subscriber", "query", "declare_liveliness_subscriber", "liveliness_query"]
+
+
+def access_control(
+    prefix: str, layout: KeyLayout, inbound: Iterable[tuple[str, str, str]], operators: Iterable[str] = ()
+) -> dict[str, Any]:
+    """Zenoh's ``access_control`` value for a bridge with key prefix ``prefix``.
+
+    ``inbound`` holds (topic, ROS type, md5) of each allow-listed inbound topic; ``operators`` the usernames
+    or certificate common names allowed to send them (empty: any session that can connect).
+    """
+    data = [data_pattern(prefix, layout), f"{data_pattern(prefix, layout)}/@adv/**"]
+    services = services_pattern(prefix)
+    observed = [*data, f"{services}/@types/**", f"{services}/@bridge/status"]
+    outgoing = [*data, f"{services}/@types/**", f"{services}/@bridge/**"]
+    if layout is KeyLayout.ZENOH_BRIDGE_ROS1:
+        observed.append(discovery_pattern())
+        outgoing.append(discovery_pattern())
+    inbound_keys = []
+    for topic, type_name, md5 in inbound:
+        inbound_keys += [topic_key(prefix, topic, layout, type_name, md5), publish_key(services, topic)]
+    operators = sorted(set(operators))
+    subjects: list[dict[str, Any]] = [{"id": "anyone"}]
+    senders = ["anyone"]
+    if operators:
+        subjects += [
+            {"id": "operator_users", "usernames": operators},
+            {"id": "operator_certs", "cert_common_names": operators},
+        ]
+        senders = ["operator_users", "operator_certs"]
+    rules: list[dict[str, Any]] = [
+        {"id": "bridge_out", "messages": _ALL, "flows": ["egress"], "permission": "allow", "key_exprs": outgoing},
+        {"id": "observe", "messages": _OBSERVE, "flows": ["ingress"], "permission": "allow", "key_exprs": observed},
+    ]
+    policies: list[dict[str, Any]] = [{"rules": ["bridge_out", "observe"], "subjects": ["anyone"]}]
+    if inbound_keys:
+        rules.append(
+            {"id": "inbound", "messages": ["put", "query"], "flows": ["ingress"], "permission": "allow",
+             "key_exprs": inbound_keys}
+        )  # fmt: skip
+        policies.append({"rules": ["inbound"], "subjects": senders})
+    return {"enabled": True, "default_permission": "deny", "rules": rules, "subjects": subjects, "policies": policies}

@@ -1,0 +1,66 @@
+"""The potential field's fallback guide: a wavefront navigation function over the field's obstacles.
+
+The obstacles (already grown by the robot radius, so a point stands for the robot) are rasterised
+conservatively: a cell is blocked when any of its points could lie in an obstacle (its centre is within half a
+diagonal of one). :func:`mrs_nav.maps.wavefront.wavefront` then gives the geodesic distance to the goal over
+the free cells, which has no local minimum but the goal, and :meth:`NavigationFunction.downhill` the point a
+few cells further down it, which the trapped point heads for. A gap narrower than the robot is closed in the
+grown obstacles, so neither the field nor this guide leads through it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import numpy.typing as npt
+
+from mrs_nav.fields.potential_field import Bounds
+from mrs_nav.geometry import FloatArray
+from mrs_nav.maps.obstacles import Obstacles
+from mrs_nav.maps.occupancy_grid import FREE, OCCUPIED, OccupancyGrid
+from mrs_nav.maps.wavefront import wavefront
+
+#: Cell size (m) of the navigation function's grid.
+RESOLUTION = 0.05
+# How many cells down the wavefront the trapped point aims (a look-ahead smooths the staircase of cells).
+_AHEAD = 3
+
+
+class NavigationFunction:
+    """Geodesic distance to ``goal`` around ``obstacles`` over ``bounds`` (metres); see the module docstring."""
+
+    def __init__(self, obstacles: Obstacles, goal: tuple[float, float], bounds: Bounds) -> None:
+        xmin, ymin, xmax, ymax = bounds
+        cols, rows = math.ceil((xmax - xmin) / RESOLUTION), math.ceil((ymax - ymin) / RESOLUTION)
+        xs = xmin + (np.arange(cols) + 0.5) * RESOLUTION
+        ys = ymin + (np.arange(rows) + 0.5) * RESOLUTION
+        centres = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
+        blocked = obstacles.contains(centres, RESOLUTION / math.sqrt(2.0)).reshape(rows, cols)
+        grid = OccupancyGrid(np.where(blocked, OCCUPIED, FREE).astype(np.int8), RESOLUTION, (xmin, ymin, 0.0))
+        self.wave = wavefront(grid, goal, RESOLUTION)
+
+    def distance(self, points: npt.ArrayLike) -> FloatArray:
+        """Geodesic distance to the goal (m) at ``(N, 2)`` points; ``inf`` in blocked or cut-off cells."""
+        return self.wave.at(points)
+
+    def downhill(self, points: npt.ArrayLike) -> FloatArray:
+        """``(N, 2)`` targets a few cells down the distance from each point (from the best of its 5 x 5
+        neighbourhood when its own cell is blocked); the point itself where nothing nearby reaches the goal."""
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        flat, inside = self.wave.coarse_cells(p)
+        rows, cols = self.wave.distance.shape
+        distance = self.wave.distance.reshape(-1)
+        towards = self.wave.towards.reshape(-1)
+        r, c = np.divmod(flat, cols)
+        offsets = np.arange(-2, 3)
+        rr = np.clip(r[:, None, None] + offsets[None, :, None], 0, rows - 1)
+        cc = np.clip(c[:, None, None] + offsets[None, None, :], 0, cols - 1)
+        around = (rr * cols + cc).reshape(len(p), -1)
+        best = around[np.arange(len(p)), np.argmin(distance[around], axis=1)]
+        cell = np.where(np.isfinite(distance[flat]), flat, best)
+        for _ in range(_AHEAD):
+            cell = np.where(towards[cell] >= 0, towards[cell], cell)
+        reachable = inside & np.isfinite(distance[cell])
+        out: FloatArray = np.where(reachable[:, None], self.wave.centres(cell), p)
+        return out

@@ -1,0 +1,124 @@
+"""Parameters of the particle filter, under AMCL's names where they mean the same thing.
+
+Units: metres, radians, seconds. The odometry alphas are those of AMCL's ``diff`` model (Thrun et al.,
+*Probabilistic Robotics*, table 5.6): variances per squared motion, see :mod:`mrs_nav.motion_model`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from mrs_nav.errors import InvalidInputError
+from mrs_nav.motion_model import OdometryNoise
+
+
+@dataclass(frozen=True)
+class LocalisationConfig:
+    """Particle counts, KLD bounds, update gates, odometry noise, likelihood field and recovery rates."""
+
+    min_particles: int = 500
+    max_particles: int = 10000
+    kld_err: float = 0.01  # KLD bound on the error of the sample-based posterior
+    kld_z: float = 0.99  # upper standard normal quantile of (1 - delta)
+    kld_bin_xy: float = 0.5  # m, histogram bin of the KLD count (AMCL's fixed 0.5 m)
+    kld_bin_yaw: float = math.radians(10.0)  # rad, histogram bin of the KLD count (AMCL's fixed 10 degrees)
+    update_min_d: float = 0.2  # m travelled before the next filter update
+    update_min_a: float = math.pi / 6.0  # rad turned before the next filter update
+    resample_interval: int = 1  # filter updates between resamplings
+    odom_alpha1: float = 0.02  # rad^2/rad^2: rotation noise from rotation
+    odom_alpha2: float = 0.02  # rad^2/m^2: rotation noise from translation
+    odom_alpha3: float = 0.02  # m^2/m^2: translation noise from translation
+    odom_alpha4: float = 0.02  # m^2/rad^2: translation noise from rotation
+    laser_max_beams: int = 60  # beams used per scan, evenly spread
+    laser_z_hit: float = 0.95  # weight of the Gaussian about the nearest obstacle
+    laser_z_rand: float = 0.05  # weight of uniform random readings
+    laser_sigma_hit: float = 0.1  # m, std dev of the hit Gaussian
+    laser_sigma_max: float = 0.4  # m, broadest hit spread while the pose is uncertain
+    laser_likelihood_max_dist: float = 2.0  # m, distance transform clipped here
+    laser_min_range: float = -1.0  # m, readings below are ignored (< 0: the scan's own range_min)
+    laser_max_range: float = -1.0  # m, readings above are ignored (< 0: the scan's own range_max)
+    min_effective_fraction: float = 0.1  # scan likelihood tempered to keep this share of particles effective
+    recovery_alpha_slow: float = 0.001  # decay of the slow average likelihood (0 disables recovery)
+    recovery_alpha_fast: float = 0.1  # decay of the fast average likelihood
+    initial_pose_x: float = 0.0  # m
+    initial_pose_y: float = 0.0  # m
+    initial_pose_a: float = 0.0  # rad
+    initial_cov_xx: float = 0.5 * 0.5  # m^2
+    initial_cov_yy: float = 0.5 * 0.5  # m^2
+    initial_cov_aa: float = (math.pi / 12.0) ** 2  # rad^2
+    seed: int = -1  # random seed (< 0: from the operating system)
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+                raise InvalidInputError(f"{f.name}: must be a finite number, got {value!r}")
+        if not 1 <= self.min_particles <= self.max_particles:
+            raise InvalidInputError(
+                f"min_particles/max_particles: need 1 <= min <= max, got {self.min_particles}, {self.max_particles}"
+            )
+        positive = (
+            "kld_err",
+            "kld_bin_xy",
+            "kld_bin_yaw",
+            "laser_sigma_hit",
+            "laser_sigma_max",
+            "laser_likelihood_max_dist",
+        )
+        for name in positive:
+            if getattr(self, name) <= 0.0:
+                raise InvalidInputError(f"{name}: must be > 0, got {getattr(self, name)}")
+        non_negative = (
+            "odom_alpha1",
+            "odom_alpha2",
+            "odom_alpha3",
+            "odom_alpha4",
+            "update_min_d",
+            "update_min_a",
+            "laser_z_hit",
+            "laser_z_rand",
+            "initial_cov_xx",
+            "initial_cov_yy",
+            "initial_cov_aa",
+        )
+        for name in non_negative:
+            if getattr(self, name) < 0.0:
+                raise InvalidInputError(f"{name}: must be >= 0, got {getattr(self, name)}")
+        if self.laser_z_hit + self.laser_z_rand <= 0.0:
+            raise InvalidInputError("laser_z_hit + laser_z_rand: must be > 0")
+        if not 0.0 <= self.min_effective_fraction <= 1.0:
+            raise InvalidInputError(f"min_effective_fraction: must lie in [0, 1], got {self.min_effective_fraction}")
+        if not 0.0 < self.kld_z < 1.0:
+            raise InvalidInputError(f"kld_z: must lie in (0, 1), got {self.kld_z}")
+        if not (0.0 <= self.recovery_alpha_slow <= 1.0 and 0.0 <= self.recovery_alpha_fast <= 1.0):
+            raise InvalidInputError("recovery_alpha_slow/recovery_alpha_fast: must lie in [0, 1]")
+        if self.laser_max_beams < 2 or self.resample_interval < 1:
+            raise InvalidInputError("laser_max_beams must be >= 2 and resample_interval >= 1")
+
+    @property
+    def odometry_noise(self) -> OdometryNoise:
+        return OdometryNoise(self.odom_alpha1, self.odom_alpha2, self.odom_alpha3, self.odom_alpha4)
+
+    @classmethod
+    def from_mapping(cls, values: Mapping[str, Any]) -> LocalisationConfig:
+        """A config from parameter values by name (unknown names are an error); ints stay ints."""
+        fields = {f.name: f for f in dataclasses.fields(cls)}
+        unknown = sorted(set(values) - set(fields))
+        if unknown:
+            raise InvalidInputError(f"unknown localisation parameters: {', '.join(unknown)}")
+        converted: dict[str, Any] = {}
+        for name, value in values.items():
+            default = fields[name].default
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise InvalidInputError(f"{name}: expected a number, got {value!r}")
+            if isinstance(default, int):
+                if not isinstance(value, int):
+                    raise InvalidInputError(f"{name}: expected an integer, got {value!r}")
+                converted[name] = value
+            else:
+                converted[name] = float(value)
+        return cls(**converted)

@@ -1,0 +1,341 @@
+"""Monte Carlo localisation on a known map (Thrun et al., *Probabilistic Robotics*, ch. 8; Fox 2003 for KLD).
+
+Each filter update (once the odometry has moved ``update_min_d`` or turned ``update_min_a`` since the last)
+
+1. moves every particle by the odometry increment with sampled noise (:func:`sample_motion`),
+2. weights it by the likelihood field of the scan's beams (:class:`LikelihoodField`), in log space,
+3. every ``resample_interval`` updates, resamples with the low-variance (systematic) sampler, keeping as many
+   particles as the KLD bound asks for (between ``min_particles`` and ``max_particles``), and replaces a
+   fraction ``max(0, 1 - w_fast / w_slow)`` of them with random poses in free space (Augmented MCL, table 8.3):
+   ``w_fast`` and ``w_slow`` are fast and slow running averages of how well the scans fit, so a sudden fall
+   (the robot was kidnapped) spreads particles over the map until one of them finds the true pose.
+
+The fit of a scan is the per-beam geometric mean of the weighted average likelihood: it lies in (0, ~z_hit] and
+does not depend on how many beams were used. All steps are numpy over the whole particle set.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+from scipy.special import logsumexp
+from scipy.stats import norm
+
+from mrs_nav.errors import InvalidInputError
+from mrs_nav.geometry import FloatArray, Pose2D, wrap_angle, wrap_angles
+from mrs_nav.localisation.config import LocalisationConfig
+from mrs_nav.localisation.likelihood_field import LikelihoodField
+from mrs_nav.maps.occupancy_grid import OccupancyGrid
+from mrs_nav.motion_model import OdometryNoise, decompose
+
+_CLUSTER_RADIUS = 0.75  # m: particles this close to the heaviest bin's mean make the pose estimate
+_UNCERTAIN_SHARE = 0.5  # a dominant mode with less of the weight than this leaves the pose unknown
+
+
+@dataclass(frozen=True, eq=False)
+class BeamScan:
+    """One laser scan for the filter: ranges (m) at angles (rad, laser frame), limits, and the laser's mounting
+    (its pose in the robot's base frame). Readings outside [range_min, range_max) or not finite are unused."""
+
+    ranges: FloatArray
+    angles: FloatArray
+    range_min: float
+    range_max: float
+    mount: Pose2D = field(default_factory=lambda: Pose2D(0.0, 0.0, 0.0))
+
+    def __post_init__(self) -> None:
+        if self.ranges.shape != self.angles.shape or self.ranges.ndim != 1:
+            raise InvalidInputError(f"scan has {self.ranges.shape} ranges for {self.angles.shape} angles")
+        if not (math.isfinite(self.range_max) and 0.0 <= self.range_min < self.range_max):
+            raise InvalidInputError(
+                f"scan range limits must satisfy 0 <= min < max, got {self.range_min}, {self.range_max}"
+            )
+
+
+@dataclass(frozen=True)
+class PoseEstimate:
+    """The filter's pose (map frame) and its 3x3 covariance over (x m, y m, yaw rad)."""
+
+    pose: Pose2D
+    covariance: FloatArray
+    share: float = 1.0  # weight of the particles in the dominant mode (1: all of them)
+
+
+def sample_motion(
+    particles: FloatArray, start: Pose2D, end: Pose2D, noise: OdometryNoise, rng: np.random.Generator
+) -> None:
+    """Move ``(N, 3)`` particles in place by the odometry increment ``start -> end`` with sampled noise."""
+    rot1, trans, rot2 = decompose(start, end)
+    n = len(particles)
+    sd_rot1 = math.sqrt(noise.a1 * rot1**2 + noise.a2 * trans**2)
+    sd_trans = math.sqrt(noise.a3 * trans**2 + noise.a4 * (rot1**2 + rot2**2))
+    sd_rot2 = math.sqrt(noise.a1 * rot2**2 + noise.a2 * trans**2)
+    e = rng.standard_normal((3, n))
+    heading = particles[:, 2] + rot1 + sd_rot1 * e[0]
+    step = trans + sd_trans * e[1]
+    particles[:, 0] += step * np.cos(heading)
+    particles[:, 1] += step * np.sin(heading)
+    particles[:, 2] = wrap_angles(heading + rot2 + sd_rot2 * e[2])
+
+
+def kld_limit(bins: npt.NDArray[np.intp] | int, err: float, z: float, max_particles: int) -> npt.NDArray[np.float64]:
+    """Particles needed for ``bins`` occupied histogram bins (Fox 2003, eq. 8; AMCL's ``pf_resample_limit``)."""
+    k = np.asarray(bins, dtype=np.float64)
+    a = 2.0 / (9.0 * np.maximum(k - 1.0, 1.0))
+    n = (k - 1.0) / (2.0 * err) * (1.0 - a + np.sqrt(a) * z) ** 3
+    return np.where(k <= 1.0, float(max_particles), np.ceil(n))
+
+
+class ParticleFilter:
+    """MCL with KLD-adaptive sample size and random-particle recovery on one map."""
+
+    def __init__(self, grid: OccupancyGrid, config: LocalisationConfig | None = None) -> None:
+        self.config = config or LocalisationConfig()
+        self.grid = grid
+        self._rng = np.random.default_rng(None if self.config.seed < 0 else self.config.seed)
+        self._z = float(norm.ppf(self.config.kld_z))
+        if grid.origin[2] != 0.0:
+            raise InvalidInputError(f"localisation needs a map with an unrotated origin, got yaw {grid.origin[2]}")
+        if not np.any(grid.occupied_mask):
+            raise InvalidInputError("localisation needs a map with at least one occupied cell")
+        self._free_cells = np.flatnonzero(grid.free_mask)
+        if self._free_cells.size == 0:
+            raise InvalidInputError("localisation needs a map with at least one free cell")
+        self._fields: dict[float, LikelihoodField] = {}
+        self._last_odom: Pose2D | None = None
+        self._updates = 0
+        self._w_slow = 0.0
+        self._w_fast = 0.0
+        self.particles: FloatArray = np.zeros((0, 3))
+        self._log_weights: FloatArray = np.zeros(0)
+        c = self.config
+        self.set_pose(
+            Pose2D(c.initial_pose_x, c.initial_pose_y, c.initial_pose_a),
+            np.diag([c.initial_cov_xx, c.initial_cov_yy, c.initial_cov_aa]),
+        )
+
+    # -- initialisation -----------------------------------------------------------------------------------------
+
+    def set_pose(self, pose: Pose2D, covariance: npt.ArrayLike) -> None:
+        """Restart from a Gaussian about ``pose`` (rviz's 2D Pose Estimate); ``covariance`` is 3x3 (x, y, yaw)."""
+        cov = np.asarray(covariance, dtype=np.float64)
+        if cov.shape != (3, 3) or not np.all(np.isfinite(cov)) or np.any(np.diag(cov) < 0.0):
+            raise InvalidInputError(f"initial pose covariance must be a finite 3x3 matrix, got {cov.tolist()}")
+        n = self.config.max_particles
+        # A covariance that is not positive semi-definite (rviz sends diagonal ones) is used by its diagonal.
+        try:
+            draws = self._rng.multivariate_normal(np.zeros(3), cov, size=n, method="cholesky")
+        except np.linalg.LinAlgError:
+            draws = self._rng.standard_normal((n, 3)) * np.sqrt(np.diag(cov))
+        particles = draws + np.array([pose.x, pose.y, pose.yaw])
+        particles[:, 2] = wrap_angles(particles[:, 2])
+        self._reset(particles)
+
+    def global_localisation(self) -> None:
+        """Spread ``max_particles`` uniformly over the map's free space (AMCL's ``global_localization``)."""
+        self._reset(self._random_poses(self.config.max_particles))
+
+    def _reset(self, particles: FloatArray) -> None:
+        self.particles = particles
+        self._log_weights = np.zeros(len(particles))
+        self._estimate = self._compute_estimate()
+        # The new cloud describes the robot as it is now: odometry before the next scan must not move it.
+        self._last_odom = None
+        self._force_update = True
+        self._w_slow = self._w_fast = 0.0
+
+    def _random_poses(self, count: int) -> FloatArray:
+        """``(count, 3)`` poses uniform over the free cells (x, y) and headings (rad)."""
+        g, rng = self.grid, self._rng
+        row, col = np.divmod(rng.choice(self._free_cells, size=count), g.width)
+        return np.column_stack(
+            [
+                g.origin[0] + (col + rng.random(count)) * g.resolution,
+                g.origin[1] + (row + rng.random(count)) * g.resolution,
+                rng.uniform(-math.pi, math.pi, count),
+            ]
+        )
+
+    def _field(self, range_max: float) -> LikelihoodField:
+        model = self._fields.get(range_max)
+        if model is None:
+            c = self.config
+            model = LikelihoodField(
+                self.grid,
+                z_hit=c.laser_z_hit,
+                z_rand=c.laser_z_rand,
+                max_dist=c.laser_likelihood_max_dist,
+                range_max=range_max,
+            )
+            self._fields = {range_max: model}  # one laser: keep the latest only
+        return model
+
+    def _sigma(self) -> float:
+        """The hit spread (m) for the next scan: ``laser_sigma_hit`` once the pose is known to a few centimetres,
+        doubled (up to ``laser_sigma_max``) while the dominant mode is wider, and ``laser_sigma_max`` while
+        it holds less than half of the weight (global localisation, recovery). A particle cloud spread over the
+        map rarely has a particle within ``laser_sigma_hit`` of the truth, and a sharp model then scores them
+        all alike; the broad one ranks them by how close they are, and sharpens as they gather."""
+        c = self.config
+        if self._estimate.share < _UNCERTAIN_SHARE:
+            return c.laser_sigma_max
+        spread = math.sqrt(max(0.0, float(self._estimate.covariance[0, 0] + self._estimate.covariance[1, 1])))
+        sigma = c.laser_sigma_hit
+        while sigma < c.laser_sigma_max and sigma < spread:
+            sigma = min(2.0 * sigma, c.laser_sigma_max)
+        return sigma
+
+    # -- reading ------------------------------------------------------------------------------------------------
+
+    @property
+    def weights(self) -> FloatArray:
+        """Normalised particle weights, shape ``(N,)``."""
+        w = np.exp(self._log_weights - self._log_weights.max())
+        return np.asarray(w / w.sum(), dtype=np.float64)
+
+    @property
+    def recovery_fraction(self) -> float:
+        """Fraction of particles the next resampling replaces with random ones (0 while the fit holds)."""
+        if self._w_slow <= 0.0:
+            return 0.0
+        return max(0.0, 1.0 - self._w_fast / self._w_slow)
+
+    def estimate(self) -> PoseEstimate:
+        """The pose estimate after the last update (or reset)."""
+        return self._estimate
+
+    def _compute_estimate(self) -> PoseEstimate:
+        """Weighted mean and covariance of the particles near the heaviest 0.5 m cell (the dominant mode)."""
+        w = self.weights
+        p = self.particles
+        _, inverse = np.unique(_bin_keys(p[:, :2], self.config.kld_bin_xy), return_inverse=True)
+        heaviest = int(np.argmax(np.bincount(inverse, weights=w)))
+        in_cell = inverse == heaviest
+        centre = np.average(p[in_cell, :2], axis=0, weights=w[in_cell] + 1e-300)
+        near = np.hypot(p[:, 0] - centre[0], p[:, 1] - centre[1]) <= _CLUSTER_RADIUS
+        share = float(w[near].sum())
+        wn = w[near] / share if share > 0.0 else np.full(int(near.sum()), 1.0 / near.sum())
+        pn = p[near]
+        mean_yaw = math.atan2(float(wn @ np.sin(pn[:, 2])), float(wn @ np.cos(pn[:, 2])))
+        mean = np.array([wn @ pn[:, 0], wn @ pn[:, 1], mean_yaw])
+        d = pn - mean
+        d[:, 2] = wrap_angles(d[:, 2])
+        cov = (d * wn[:, None]).T @ d
+        return PoseEstimate(Pose2D(float(mean[0]), float(mean[1]), wrap_angle(mean_yaw)), cov, share)
+
+    # -- updating -----------------------------------------------------------------------------------------------
+
+    def update(self, odom: Pose2D, scan: BeamScan) -> bool:
+        """Feed the odometry pose (odom frame) at a scan's time and the scan; True if the filter was updated.
+
+        The first call only records the odometry; later calls update once the robot has moved enough, or at
+        once after :meth:`set_pose` / :meth:`global_localisation`.
+        """
+        c = self.config
+        if self._last_odom is None:
+            self._last_odom = odom
+            if not self._force_update:
+                return False
+        rot1, trans, rot2 = decompose(self._last_odom, odom)
+        moved = abs(trans) >= c.update_min_d or abs(wrap_angle(odom.yaw - self._last_odom.yaw)) >= c.update_min_a
+        if not (moved or self._force_update):
+            return False
+        if rot1 or trans or rot2:
+            sample_motion(self.particles, self._last_odom, odom, c.odometry_noise, self._rng)
+        self._last_odom = odom
+        self._force_update = False
+        self._weigh(scan)
+        self._updates += 1
+        if self._updates % c.resample_interval == 0:
+            self._resample()
+        self._estimate = self._compute_estimate()
+        return True
+
+    def _beams(self, scan: BeamScan) -> tuple[FloatArray, FloatArray]:
+        """Endpoints (x, y) in the robot's base frame of up to ``laser_max_beams`` evenly spaced valid beams."""
+        c = self.config
+        lo = scan.range_min if c.laser_min_range < 0.0 else max(scan.range_min, c.laser_min_range)
+        hi = scan.range_max if c.laser_max_range < 0.0 else min(scan.range_max, c.laser_max_range)
+        step = (len(scan.ranges) - 1) / (c.laser_max_beams - 1) if len(scan.ranges) > 1 else 1.0
+        picked = np.unique(np.rint(np.arange(c.laser_max_beams) * step).astype(np.intp))
+        picked = picked[picked < len(scan.ranges)]
+        r, a = scan.ranges[picked], scan.angles[picked]
+        valid = np.isfinite(r) & (r >= lo) & (r < hi)
+        r, a = r[valid], a[valid] + scan.mount.yaw
+        m = scan.mount
+        return m.x + r * np.cos(a), m.y + r * np.sin(a)
+
+    def _weigh(self, scan: BeamScan) -> None:
+        ex, ey = self._beams(scan)
+        if ex.size == 0:
+            return  # nothing seen: the motion update alone
+        model = self._field(scan.range_max)
+        p = self.particles
+        c, s = np.cos(p[:, 2])[:, None], np.sin(p[:, 2])[:, None]
+        xs = p[:, 0, None] + c * ex - s * ey
+        ys = p[:, 1, None] + s * ex + c * ey
+        log_p = model.log_likelihood(xs, ys, self._sigma()).sum(axis=1)
+        prior = self._log_weights - logsumexp(self._log_weights)
+        fit = math.exp(float(logsumexp(prior + log_p)) / ex.size)
+        self._log_weights = prior + self._temper(prior, log_p) * log_p
+        cfg = self.config
+        if self._w_slow <= 0.0:
+            self._w_slow = self._w_fast = fit
+        else:
+            self._w_slow += cfg.recovery_alpha_slow * (fit - self._w_slow)
+            self._w_fast += cfg.recovery_alpha_fast * (fit - self._w_fast)
+
+    def _temper(self, prior: FloatArray, log_p: FloatArray) -> float:
+        """The largest exponent in (0, 1] on the scan likelihood that keeps ``min_effective_fraction`` of the
+        particles effective (Kish's ESS): beams are not independent, and a full-strength likelihood on a
+        spread-out cloud would leave a handful of particles, none of them near the truth."""
+        target = self.config.min_effective_fraction * len(log_p)
+
+        def ess(beta: float) -> float:
+            lw = prior + beta * log_p
+            return math.exp(2.0 * float(logsumexp(lw)) - float(logsumexp(2.0 * lw)))
+
+        if ess(1.0) >= target:
+            return 1.0
+        lo, hi = 0.0, 1.0
+        for _ in range(30):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if ess(mid) >= target else (lo, mid)
+        return lo
+
+    def _resample(self) -> None:
+        c = self.config
+        n_max = c.max_particles
+        cumulative = np.cumsum(self.weights)
+        cumulative[-1] = 1.0
+        positions = (self._rng.random() + np.arange(n_max)) / n_max
+        drawn = self.particles[np.searchsorted(cumulative, positions)]
+        # The systematic draws in random order, each replaced by a random pose with the recovery probability
+        # (spread-out random poses fill new bins, so the KLD count grows with them), kept up to the first count
+        # that covers its histogram bins.
+        drawn = drawn[self._rng.permutation(n_max)]
+        if c.recovery_alpha_slow > 0.0 and c.recovery_alpha_fast > 0.0 and self.recovery_fraction > 0.0:
+            replace = np.flatnonzero(self._rng.random(n_max) < self.recovery_fraction)
+            drawn[replace] = self._random_poses(replace.size)
+        keys = _bin_keys(drawn, c.kld_bin_xy, c.kld_bin_yaw)
+        _, first = np.unique(keys, return_index=True)
+        new_bin = np.zeros(n_max)
+        new_bin[first] = 1.0
+        needed = kld_limit(np.cumsum(new_bin).astype(np.intp), c.kld_err, self._z, n_max)
+        enough = np.flatnonzero(np.arange(1, n_max + 1) >= np.clip(needed, c.min_particles, n_max))
+        count = int(enough[0]) + 1 if enough.size else n_max
+        self.particles = drawn[:count].copy()
+        self._log_weights = np.zeros(count)
+
+
+def _bin_keys(poses: FloatArray, size_xy: float, size_yaw: float = 0.0) -> npt.NDArray[np.int64]:
+    """One integer per pose naming its histogram bin: (x, y) cells of ``size_xy`` m, and ``size_yaw`` rad
+    heading sectors unless that is 0. 21 bits per axis: a million bins each way."""
+    cells = np.floor(poses[:, :2] / size_xy).astype(np.int64) + (1 << 20)
+    keys = (cells[:, 0] << 21) | cells[:, 1]
+    if size_yaw > 0.0:
+        keys = (keys << 21) | (np.floor(poses[:, 2] / size_yaw).astype(np.int64) + (1 << 20))
+    return np.asarray(keys, dtype=np.int64)

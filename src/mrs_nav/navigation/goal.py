@@ -1,0 +1,140 @@
+"""The goal state machine of a :class:`~mrs_nav.navigation.navigator.Navigator`: which goal is held, what state
+it is in (the values of ``actionlib_msgs/GoalStatus``), the events each transition reports, and which goals are
+refused before they start.
+
+A goal is accepted (``ACTIVE``, preempting an active one) or refused (the current goal, if any, runs on); it
+ends ``REACHED``, ``FAILED`` or ``PREEMPTED`` (cancelled). Only :meth:`GoalTracker.accept`,
+:meth:`GoalTracker.cancel` and :meth:`GoalTracker.end` change the state.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import Enum
+
+import numpy as np
+from scipy import ndimage
+
+from mrs_nav.maps.occupancy_grid import UNKNOWN, OccupancyGrid
+
+
+class GoalState(Enum):
+    """Where the current (or last) goal stands; the values are those of ``actionlib_msgs/GoalStatus``."""
+
+    IDLE = 0  # no goal yet (GoalStatus.PENDING)
+    ACTIVE = 1
+    PREEMPTED = 2
+    REACHED = 3  # GoalStatus.SUCCEEDED
+    FAILED = 4  # GoalStatus.ABORTED
+    REFUSED = 5  # GoalStatus.REJECTED
+
+
+class EventKind(Enum):
+    """What happened; ``warning`` kinds are those a node logs as warnings."""
+
+    ACCEPTED = "accepted"
+    REFUSED = "refused"
+    PREEMPTED = "preempted"
+    PLANNED = "planned"
+    PLAN_FAILED = "plan_failed"
+    REACHED = "reached"
+    FAILED = "failed"
+    HOLDING = "holding"
+    RESUMED = "resumed"
+    CANCELLED = "cancelled"
+
+    @property
+    def warning(self) -> bool:
+        return self in {EventKind.REFUSED, EventKind.PLAN_FAILED, EventKind.FAILED, EventKind.HOLDING}
+
+
+@dataclass(frozen=True)
+class NavEvent:
+    """One thing worth reporting, with a one-line human-readable ``message``."""
+
+    kind: EventKind
+    message: str
+
+
+def goal_refusal(
+    raw: OccupancyGrid | None, grid: OccupancyGrid | None, x: float, y: float, *, yaw: float | None, inflation_m: float
+) -> str | None:
+    """Why the goal ``(x, y)`` (heading ``yaw``, None for any) must be refused on the map ``raw`` planned on as
+    ``grid`` (inflated by ``inflation_m``, unknown made free when allowed), or None when it may be tried."""
+    if not (math.isfinite(x) and math.isfinite(y)):
+        return "its position is not a finite number"
+    if yaw is not None and not math.isfinite(yaw):
+        return "its heading is not a finite number"
+    if grid is None or raw is None:
+        return "no map received yet"
+    goal = np.array([[x, y]])
+    _, _, inside = grid.cells_of(goal)
+    if not inside[0]:
+        return "it lies outside the map"
+    if raw.is_occupied(goal)[0]:
+        return "it lies inside an obstacle"
+    if grid.is_occupied(goal)[0]:
+        return f"it lies within {inflation_m:.3f} m (robot radius + margin) of an obstacle"
+    if not grid.is_free(goal)[0]:
+        return "it lies in unknown space and allow_unknown is off"
+    if enclosed_unknown(raw, x, y):
+        return "it lies in unknown space enclosed by obstacles (the inside of an obstacle)"
+    return None
+
+
+def enclosed_unknown(raw: OccupancyGrid, x: float, y: float) -> bool:
+    """Whether ``(x, y)`` lies in an unknown region of ``raw`` that touches neither a free cell nor the edge of
+    the map: the unseen inside of an obstacle, which ``allow_unknown`` must not make a goal."""
+    rows, cols, inside = raw.cells_of(np.array([[x, y]]))
+    unknown = raw.values == UNKNOWN
+    if not inside[0] or not unknown[rows[0], cols[0]]:
+        return False
+    labels, _ = ndimage.label(unknown)  # 4-connected: a diagonal gap in a wall does not open it
+    region = labels == labels[rows[0], cols[0]]
+    if region[0, :].any() or region[-1, :].any() or region[:, 0].any() or region[:, -1].any():
+        return False
+    rim = ndimage.binary_dilation(region) & ~region
+    return not bool(np.any(raw.free_mask[rim]))
+
+
+class GoalTracker:
+    """The goal held and its state."""
+
+    def __init__(self) -> None:
+        self.state = GoalState.IDLE
+        self.goal: tuple[float, float] | None = None
+        self.yaw: float | None = None  # the goal heading (rad), None when any will do
+
+    @property
+    def active(self) -> bool:
+        return self.state is GoalState.ACTIVE and self.goal is not None
+
+    def describe(self) -> str:
+        assert self.goal is not None
+        return f"goal ({self.goal[0]:.2f}, {self.goal[1]:.2f})"
+
+    def accept(self, x: float, y: float, yaw: float | None = None) -> list[NavEvent]:
+        """Make ``(x, y)`` (heading ``yaw``) the active goal; the events (a preemption first, if any)."""
+        events = []
+        if self.active:
+            events.append(NavEvent(EventKind.PREEMPTED, f"{self.describe()} preempted by a new goal"))
+        self.goal = (float(x), float(y))
+        self.yaw = None if yaw is None else float(yaw)
+        self.state = GoalState.ACTIVE
+        heading = "" if yaw is None else f", heading {yaw:.2f} rad"
+        events.append(NavEvent(EventKind.ACCEPTED, f"goal ({x:.2f}, {y:.2f}{heading}) accepted"))
+        return events
+
+    def cancel(self) -> list[NavEvent]:
+        """Drop the active goal (no event when there is none)."""
+        if not self.active:
+            return []
+        self.end(GoalState.PREEMPTED)
+        return [NavEvent(EventKind.CANCELLED, "goal cancelled")]
+
+    def end(self, state: GoalState) -> None:
+        """End the active goal in ``state``."""
+        self.goal = None
+        self.yaw = None
+        self.state = state

@@ -1,0 +1,233 @@
+"""LocalisationNode: Monte Carlo localisation (:class:`mrs_nav.localisation.ParticleFilter`) in place of AMCL.
+
+Subscribes ``scan`` (sensor_msgs/LaserScan), ``map`` (nav_msgs/OccupancyGrid, latched; with ``~use_map_topic``
+false the ``static_map`` service is called once instead) and ``initialpose`` (PoseWithCovarianceStamped: rviz's
+2D Pose Estimate). For every scan it looks up the odometry pose (``odom_frame_id -> base_frame_id``) at the
+scan's stamp through tf and feeds both to the filter, which updates once the robot has moved ``update_min_d``
+or turned ``update_min_a``. Publishes ``amcl_pose`` (PoseWithCovarianceStamped) and ``particlecloud``
+(PoseArray) after each update, and tf ``global_frame_id -> odom_frame_id`` every ``~transform_publish_period``
+s, dated ``transform_tolerance`` s ahead as AMCL does (:mod:`mrs_nav.ros.map_odom`). Service
+``global_localization`` (std_srvs/Empty) spreads the particles over the free space. Parameters take AMCL's
+names (config/localisation.yaml, the README).
+
+A scan or pose that cannot be used is logged (throttled) and skipped; the node never dies of one.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import threading
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import rospy
+import tf2_ros
+from geometry_msgs.msg import PoseArray, PoseWithCovarianceStamped
+from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
+from nav_msgs.srv import GetMap
+from sensor_msgs.msg import LaserScan
+from std_srvs.srv import Empty, EmptyRequest, EmptyResponse
+
+from mrs_nav.errors import InvalidInputError, MrsNavError
+from mrs_nav.geometry import FloatArray, Pose2D
+from mrs_nav.localisation import BeamScan, LocalisationConfig, ParticleFilter, PoseEstimate
+from mrs_nav.ros.conversions import pose_from_msg, pose_msg
+from mrs_nav.ros.map_odom import MapOdomBroadcaster, lookup_pose
+from mrs_nav.ros.navigation_conversions import grid_from_msg
+from mrs_nav.ros.params import private_param
+
+_FILTER_PARAMS = tuple(f.name for f in dataclasses.fields(LocalisationConfig))
+_COV_INDEX = (0, 1, 5)  # x, y, yaw rows/columns of a 6x6 pose covariance
+_TIME_JUMP = 1.0  # s: the clock this much behind its last reading means sim time went back (a bag restarted)
+
+
+@dataclass(frozen=True)
+class LocalisationNodeConfig:
+    """The node's private parameters: frames, timing, map source, and the core :class:`LocalisationConfig`."""
+
+    filter: LocalisationConfig
+    global_frame_id: str = "map"
+    odom_frame_id: str = "odom"
+    base_frame_id: str = "base_footprint"
+    transform_tolerance: float = 0.1
+    transform_publish_period: float = 0.05
+    tf_wait: float = 0.2
+    use_map_topic: bool = True
+
+    def __post_init__(self) -> None:
+        for name in ("transform_tolerance", "transform_publish_period", "tf_wait"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise InvalidInputError(f"~{name}: must be >= 0, got {value}")
+        if self.transform_publish_period <= 0.0:
+            raise InvalidInputError("~transform_publish_period: must be > 0")
+
+    @classmethod
+    def from_params(cls) -> LocalisationNodeConfig:
+        """Read the ``~`` parameters once (defaults in config/localisation.yaml); bad values raise."""
+        values = {name: rospy.get_param(f"~{name}") for name in _FILTER_PARAMS if rospy.has_param(f"~{name}")}
+        return cls(
+            filter=LocalisationConfig.from_mapping(values),
+            global_frame_id=private_param("global_frame_id", "map"),
+            odom_frame_id=private_param("odom_frame_id", "odom"),
+            base_frame_id=private_param("base_frame_id", "base_footprint"),
+            transform_tolerance=private_param("transform_tolerance", 0.1),
+            transform_publish_period=private_param("transform_publish_period", 0.05),
+            tf_wait=private_param("tf_wait", 0.2),
+            use_map_topic=private_param("use_map_topic", True),
+        )
+
+
+def beam_scan(msg: LaserScan, mount: Pose2D) -> BeamScan:
+    """The filter's scan of a LaserScan message (InvalidInputError if its ranges do not fit its angles)."""
+    ranges = np.asarray(msg.ranges, dtype=np.float64)
+    if not (math.isfinite(msg.angle_min) and math.isfinite(msg.angle_increment)):
+        raise InvalidInputError("scan angles are not finite")
+    angles = msg.angle_min + msg.angle_increment * np.arange(ranges.size)
+    return BeamScan(ranges, angles, float(msg.range_min), float(msg.range_max), mount)
+
+
+def covariance_3x3(msg: PoseWithCovarianceStamped) -> FloatArray:
+    full = np.asarray(msg.pose.covariance, dtype=np.float64)
+    if full.size != 36:
+        raise InvalidInputError(f"pose covariance has {full.size} values, expected 36")
+    return full.reshape(6, 6)[np.ix_(_COV_INDEX, _COV_INDEX)]
+
+
+class LocalisationNode:
+    """Wires a :class:`ParticleFilter` to ``scan``, ``map``, ``initialpose``, tf and its outputs."""
+
+    def __init__(self, config: LocalisationNodeConfig) -> None:
+        self.config = config
+        self._lock = threading.Lock()
+        self._filter: ParticleFilter | None = None
+        self._pending_pose: tuple[Pose2D, FloatArray] | None = None
+        self._mount: tuple[str, Pose2D] | None = None
+        self._map_to_odom: Pose2D | None = None
+        self._last_clock = -math.inf
+        self._buffer = tf2_ros.Buffer(cache_time=rospy.Duration(30.0))
+        self._listener = tf2_ros.TransformListener(self._buffer)
+        self._map_odom = MapOdomBroadcaster(config.global_frame_id, config.odom_frame_id, config.transform_tolerance)
+        self._pose_pub = rospy.Publisher("amcl_pose", PoseWithCovarianceStamped, queue_size=2, latch=True)
+        self._cloud_pub = rospy.Publisher("particlecloud", PoseArray, queue_size=2, latch=True)
+        self._global_srv = rospy.Service("global_localization", Empty, self._on_global_localization)
+        self._initial_sub = rospy.Subscriber("initialpose", PoseWithCovarianceStamped, self._on_initial_pose)
+        if config.use_map_topic:
+            self._map_sub = rospy.Subscriber("map", OccupancyGridMsg, self._on_map, queue_size=1)
+        else:
+            threading.Thread(target=self._request_map, name="static_map", daemon=True).start()
+        self._scan_sub = rospy.Subscriber("scan", LaserScan, self._on_scan, queue_size=2)
+        self._timer = rospy.Timer(rospy.Duration(config.transform_publish_period), self._publish_transform)
+
+    # -- inputs ---------------------------------------------------------------------------------------------------
+
+    def _request_map(self) -> None:
+        try:
+            rospy.wait_for_service("static_map")
+            self._on_map(rospy.ServiceProxy("static_map", GetMap)().map)
+        except (rospy.ServiceException, rospy.ROSInterruptException) as err:
+            rospy.logerr(f"localisation: no map from static_map: {err}")
+
+    def _on_map(self, msg: OccupancyGridMsg) -> None:
+        try:
+            pf = ParticleFilter(grid_from_msg(msg), self.config.filter)
+        except MrsNavError as err:
+            rospy.logerr(f"localisation: ignoring map: {err}")
+            return
+        with self._lock:
+            if self._filter is not None:  # a new map: keep the current belief
+                estimate = self._filter.estimate()
+                pf.set_pose(estimate.pose, estimate.covariance)
+            elif self._pending_pose is not None:
+                pf.set_pose(*self._pending_pose)
+            self._filter = pf
+        rospy.loginfo(f"localisation: map {msg.info.width} x {msg.info.height} at {msg.info.resolution} m")
+
+    def _on_initial_pose(self, msg: PoseWithCovarianceStamped) -> None:
+        frame = msg.header.frame_id.lstrip("/")
+        try:
+            if frame and frame != self.config.global_frame_id:
+                raise InvalidInputError(f"initial pose in frame {frame!r}, expected {self.config.global_frame_id!r}")
+            pose, cov = pose_from_msg(msg.pose.pose), covariance_3x3(msg)
+            with self._lock:
+                self._pending_pose = (pose, cov)
+                if self._filter is not None:
+                    self._filter.set_pose(pose, cov)
+        except MrsNavError as err:
+            rospy.logwarn_throttle(5.0, f"localisation: ignoring initial pose: {err}")
+            return
+        rospy.loginfo(f"localisation: initial pose ({pose.x:.2f}, {pose.y:.2f}, {pose.yaw:.2f})")
+
+    def _on_global_localization(self, _request: EmptyRequest) -> EmptyResponse:
+        with self._lock:
+            if self._filter is not None:
+                self._filter.global_localisation()
+                rospy.loginfo("localisation: particles spread over the free space")
+            else:
+                rospy.logwarn("localisation: global_localization before any map; ignored")
+        return EmptyResponse()
+
+    def _on_scan(self, msg: LaserScan) -> None:
+        now = rospy.get_time()
+        if now < self._last_clock - _TIME_JUMP:
+            rospy.logwarn("localisation: time went back; clearing the tf buffer")
+            self._buffer.clear()
+            self._map_odom.reset()
+        self._last_clock = now
+        stamp = msg.header.stamp
+        c = self.config
+        try:
+            odom = self._lookup(c.odom_frame_id, c.base_frame_id, stamp)
+            scan = beam_scan(msg, self._mount_of(msg.header.frame_id, stamp))
+            with self._lock:
+                pf = self._filter
+                if pf is None:
+                    return
+                if not pf.update(odom, scan):
+                    return
+                estimate = pf.estimate()
+                particles = pf.particles.copy()
+                self._map_to_odom = estimate.pose.compose(odom.inverse())
+        except MrsNavError as err:
+            rospy.logwarn_throttle(5.0, f"localisation: skipping scan at {stamp.to_sec():.3f}: {err}")
+            return
+        except (tf2_ros.LookupException, tf2_ros.ConnectivityException, tf2_ros.ExtrapolationException) as err:
+            rospy.logwarn_throttle(5.0, f"localisation: skipping scan at {stamp.to_sec():.3f}, no transform: {err}")
+            return
+        self._publish_estimate(estimate, particles, stamp)
+
+    def _lookup(self, parent: str, child: str, stamp: rospy.Time) -> Pose2D:
+        return lookup_pose(self._buffer, parent, child, stamp, self.config.tf_wait)
+
+    def _mount_of(self, laser_frame: str, stamp: rospy.Time) -> Pose2D:
+        """The laser's pose in the base frame, read from tf once per laser frame."""
+        if self._mount is None or self._mount[0] != laser_frame:
+            self._mount = (laser_frame, self._lookup(self.config.base_frame_id, laser_frame, stamp))
+        return self._mount[1]
+
+    # -- outputs --------------------------------------------------------------------------------------------------
+
+    def _publish_estimate(self, estimate: PoseEstimate, particles: FloatArray, stamp: rospy.Time) -> None:
+        frame = self.config.global_frame_id
+        msg = PoseWithCovarianceStamped()
+        msg.header.stamp, msg.header.frame_id = stamp, frame
+        msg.pose.pose = pose_msg(estimate.pose)
+        full = np.zeros((6, 6))
+        full[np.ix_(_COV_INDEX, _COV_INDEX)] = estimate.covariance
+        msg.pose.covariance = full.ravel().tolist()
+        self._pose_pub.publish(msg)
+        cloud = PoseArray()
+        cloud.header = msg.header
+        cloud.poses = [pose_msg(Pose2D(float(x), float(y), float(a))) for x, y, a in particles]
+        self._cloud_pub.publish(cloud)
+
+    def _publish_transform(self, _event: Any) -> None:
+        correction = self._map_to_odom
+        if correction is not None:
+            self._map_odom.send(correction)
+
+    def spin(self) -> None:
+        rospy.spin()
+        self._timer.shutdown()

@@ -1,0 +1,44 @@
+"""Broadcasting a map -> odom correction on a timer, the part every map-frame node (SLAM, localisation) shares.
+
+The transform is dated ``ahead`` seconds past now, as gmapping and AMCL do, so lookups at the newest odometry
+stamp find it. At maximum sim rate a timer can fire twice in one clock tick; tf rejects a repeated stamp, so a
+stamp not later than the last one sent is skipped.
+"""
+
+from __future__ import annotations
+
+import math
+
+import rospy
+import tf2_ros
+
+from mrs_nav.geometry import Pose2D
+from mrs_nav.ros.conversions import pose_from_transform, transform_stamped
+
+
+class MapOdomBroadcaster:
+    """Sends ``parent -> child`` (map -> odom) with strictly increasing stamps."""
+
+    def __init__(self, parent: str, child: str, ahead: float) -> None:
+        self.parent, self.child, self.ahead = parent, child, ahead
+        self._broadcaster = tf2_ros.TransformBroadcaster()
+        self._last_stamp = -math.inf
+
+    def reset(self) -> None:
+        """Forget the last stamp (sim time went back)."""
+        self._last_stamp = -math.inf
+
+    def send(self, correction: Pose2D) -> None:
+        stamp = (rospy.Time.now() + rospy.Duration(self.ahead)).to_sec()
+        if stamp <= self._last_stamp:
+            return
+        self._last_stamp = stamp
+        try:
+            self._broadcaster.sendTransform(transform_stamped(correction, stamp, self.parent, self.child))
+        except rospy.ROSException as err:  # shutting down
+            rospy.logdebug(f"{self.parent}->{self.child} not sent: {err}")
+
+
+def lookup_pose(buffer: tf2_ros.Buffer, parent: str, child: str, stamp: rospy.Time, wait: float) -> Pose2D:
+    """``child`` in ``parent`` at ``stamp``, waiting up to ``wait`` s for the transform to arrive."""
+    return pose_from_transform(buffer.lookup_transform(parent, child, stamp, rospy.Duration(wait)))

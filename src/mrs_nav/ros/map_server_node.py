@@ -1,0 +1,97 @@
+"""MapServerNode and MapSaverNode: ROS's map_server and map_saver (not packaged by Debian 12), same names.
+
+``map_server MAP.yaml`` loads a map_server map (:func:`mrs_nav.maps.map_io.load_map`) and publishes it on
+``map`` (nav_msgs/OccupancyGrid, latched) and ``map_metadata`` (latched) in frame ``~frame_id`` (``map``), and
+answers the ``static_map`` service (nav_msgs/GetMap). ``map_saver -f NAME [--occ 65 --free 25]`` waits for
+one message on ``map`` and writes NAME.yaml + NAME.pgm (:func:`mrs_nav.maps.map_io.save_map`): cells at or
+above ``--occ`` occupied, ``0..--free`` free, the rest unknown.
+"""
+
+from __future__ import annotations
+
+import argparse
+import threading
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import rospy
+from nav_msgs.msg import MapMetaData
+from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
+from nav_msgs.srv import GetMap, GetMapRequest, GetMapResponse
+
+from mrs_nav.errors import InvalidInputError, MrsNavError
+from mrs_nav.maps.map_io import load_map, save_map
+from mrs_nav.maps.occupancy_grid import OccupancyGrid
+from mrs_nav.ros.map_messages import occupancy_grid_msg
+from mrs_nav.ros.navigation_conversions import grid_from_msg
+from mrs_nav.ros.params import private_param
+
+
+class MapServerNode:
+    """Serves one map: latched ``map`` and ``map_metadata``, and the ``static_map`` service."""
+
+    def __init__(self, grid: OccupancyGrid, frame_id: str) -> None:
+        self._msg = occupancy_grid_msg(grid, rospy.Time.now(), frame_id)
+        self._map_pub = rospy.Publisher("map", OccupancyGridMsg, queue_size=1, latch=True)
+        self._meta_pub = rospy.Publisher("map_metadata", MapMetaData, queue_size=1, latch=True)
+        self._map_pub.publish(self._msg)
+        self._meta_pub.publish(self._msg.info)
+        self._service = rospy.Service("static_map", GetMap, self._on_get_map)
+
+    def _on_get_map(self, _request: GetMapRequest) -> GetMapResponse:
+        return GetMapResponse(map=self._msg)
+
+    @classmethod
+    def from_argv(cls, argv: Sequence[str]) -> MapServerNode:
+        """``map_server MAP.yaml``; a bad or missing file raises MapFileError naming file and field."""
+        parser = argparse.ArgumentParser(prog="map_server", description="Serve a map_server map (.yaml + .pgm).")
+        parser.add_argument("map", type=Path, help="the map's .yaml description")
+        args = parser.parse_args(argv)
+        return cls(load_map(args.map), private_param("frame_id", "map"))
+
+
+@dataclass(frozen=True)
+class SaverOptions:
+    """Where to write (``NAME`` -> NAME.yaml, NAME.pgm) and map_saver's thresholds (percent)."""
+
+    name: Path
+    occupied_min: int = 65
+    free_max: int = 25
+
+    @classmethod
+    def from_argv(cls, argv: Sequence[str]) -> SaverOptions:
+        parser = argparse.ArgumentParser(prog="map_saver", description="Save the map on topic 'map' to NAME.yaml/.pgm.")
+        parser.add_argument("-f", dest="name", type=Path, default=Path("map"), help="file name without extension")
+        parser.add_argument("--occ", type=int, default=65, help="cells at or above this are occupied (0-100)")
+        parser.add_argument("--free", type=int, default=25, help="cells at or below this are free (0-100)")
+        args = parser.parse_args(argv)
+        options = cls(args.name, args.occ, args.free)
+        if not 0 <= options.free_max < options.occupied_min <= 100:
+            raise InvalidInputError(f"need 0 <= --free ({args.free}) < --occ ({args.occ}) <= 100")
+        return options
+
+
+class MapSaverNode:
+    """Saves the first message on ``map`` and is then :attr:`done` (``saved`` holds the yaml path)."""
+
+    def __init__(self, options: SaverOptions) -> None:
+        self.options = options
+        self.done = threading.Event()
+        self.saved: Path | None = None
+        self.error: MrsNavError | None = None
+        self._sub = rospy.Subscriber("map", OccupancyGridMsg, self._on_map, queue_size=1)
+
+    def _on_map(self, msg: OccupancyGridMsg) -> None:
+        if self.done.is_set():
+            return
+        o = self.options
+        try:
+            grid = grid_from_msg(msg)
+            self.saved = save_map(
+                grid, o.name.with_name(o.name.name + ".yaml"), occupied_min=o.occupied_min, free_max=o.free_max
+            )
+        except MrsNavError as err:
+            self.error = err
+        self._sub.unregister()
+        self.done.set()

@@ -1,0 +1,126 @@
+"""carmen2bag and replay on small CARMEN logs made at test time: real odometry, odometry gaps, broken stamps,
+bad lines, an existing bag."""
+
+import itertools
+import json
+
+import pytest
+
+from mrs_nav.bag.io import BagWriter, read_messages
+from mrs_nav.bag.messages import LASER_SCAN, ODOMETRY, laser_scan_message, odometry_message
+from mrs_nav.cli.main import main
+from tests.core.bag.carmen_fixture import drive, log_lines, write_log
+from tests.core.slam.synthetic import cast
+
+EVERY_SCAN = ["--param", "linearUpdate=0", "--param", "angularUpdate=0"]
+
+
+def replay(bag, out, capsys):
+    code = main(["replay", str(bag), "--slam", "--out", str(out), "--json", *EVERY_SCAN])
+    captured = capsys.readouterr()
+    return code, (json.loads(captured.out) if code == 0 else None), captured.err
+
+
+def test_real_odometry_is_the_default_and_slam_beats_it(tmp_path, capsys):
+    poses = drive()
+    log = write_log(tmp_path / "a.log", log_lines(poses, seed=1))
+    bag = tmp_path / "a.bag"
+    assert main(["carmen2bag", str(log), str(bag), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["odometry"] == "log"
+    odom = {t: m.pose.pose.position.x for _, t, m in read_messages(bag, ["/odom"])}
+    truth = {t: m.pose.pose.position.x for _, t, m in read_messages(bag, ["/ground_truth/odom"])}
+    # One odometry message per ODOM line: the fixture's line halfway between scans, and one at each scan.
+    assert len(odom) == 2 * len(poses) - 1
+    assert set(truth) <= set(odom)
+    odom = [odom[t] for t in truth]
+    truth = list(truth.values())
+    assert max(abs(a - b) for a, b in zip(odom, truth, strict=True)) > 0.05  # the log's noisy odometry
+    code, summary, _ = replay(bag, tmp_path / "out", capsys)
+    assert code == 0
+    assert summary["scans"] == len(poses)
+    assert summary["ate_rmse_m"] < 0.03
+
+
+def test_a_turn_without_odometry_is_survived(tmp_path, capsys):
+    lines = log_lines(drive(), seed=2)
+    flaser = [i for i, line in enumerate(lines) if line.startswith("FLASER")]
+    del lines[flaser[20] + 2 : flaser[21]]  # scan 21 ends a 0.3 rad turn; its wheel odometry is lost
+    bag = tmp_path / "gap.bag"
+    assert main(["carmen2bag", str(write_log(tmp_path / "gap.log", lines)), str(bag)]) == 0
+    assert "NOTE: " in capsys.readouterr().err
+    code, summary, _ = replay(bag, tmp_path / "out", capsys)
+    assert code == 0
+    assert summary["ate_rmse_m"] < 0.03
+
+
+@pytest.mark.parametrize("kind", ["constant", "two-valued", "backwards"])
+def test_broken_stamps_are_repaired_with_a_note(kind, tmp_path, capsys):
+    poses = drive()
+    n = len(poses)
+    stamps = {
+        "constant": [100.0] * n,
+        "two-valued": [100.0] * (n // 2) + [200.0] * (n - n // 2),
+        "backwards": [10.0 + 0.5 * i - (0.8 if i == 30 else 0.0) for i in range(n)],
+    }[kind]
+    bag = tmp_path / "b.bag"
+    assert main(["carmen2bag", str(write_log(tmp_path / "b.log", log_lines(poses, stamps=stamps))), str(bag)]) == 0
+    broken = sum(b <= a for a, b in itertools.pairwise(stamps))
+    assert f"NOTE: {tmp_path / 'b.log'}: {broken} of {n} scans were stamped at or before" in capsys.readouterr().err
+    scan_stamps = [t for _, t, _ in read_messages(bag, ["/scan"])]
+    assert all(b > a for a, b in itertools.pairwise(scan_stamps))
+    code, summary, _ = replay(bag, tmp_path / "out", capsys)
+    assert code == 0
+    assert summary["scans"] == n
+    assert summary["ate_rmse_m"] < 0.03
+
+
+@pytest.mark.parametrize("odom_constant", [False, True])
+def test_replay_refuses_scans_that_cannot_be_paired(odom_constant, tmp_path, capsys):
+    bag = tmp_path / "c.bag"
+    with BagWriter(bag) as writer:
+        for i, pose in enumerate(drive()[:30]):
+            scan_t = 5.0 + 0.5 * i if odom_constant else 5.0
+            odom_t = 5.0 if odom_constant else 5.0 + 0.5 * i
+            writer.write("/scan", LASER_SCAN, round(scan_t * 1e9), laser_scan_message(cast(pose), scan_t, "base_scan"))
+            msg = odometry_message(pose, odom_t, "odom", "base_footprint")
+            writer.write("/odom", ODOMETRY, round(odom_t * 1e9), msg)
+    code, _, err = replay(bag, tmp_path / "out", capsys)
+    assert code == 1
+    lines = err.strip().splitlines()
+    assert len(lines) == 1
+    assert "cannot be paired with distinct odometry" in lines[0]
+    assert lines[0].startswith(f"ERROR: bag {bag}: 29 of 30 ")
+
+
+def test_carmen2bag_replaces_an_existing_bag(tmp_path, capsys):
+    log = write_log(tmp_path / "a.log", log_lines(drive()[:10]))
+    bag = tmp_path / "a.bag"
+    bag.write_bytes(b"an older file")
+    assert main(["carmen2bag", str(log), str(bag)]) == 0
+    assert len(list(read_messages(bag, ["/scan"]))) == 10
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+    assert main(["carmen2bag", str(log), str(bag)]) == 0
+
+
+@pytest.mark.parametrize(
+    ("edit", "match"),
+    [
+        (lambda lines, i: lines.insert(i, "FLASER"), "FLASER line without a beam count"),
+        (lambda lines, i: lines.__setitem__(i, lines[i].replace("FLASER 180", "FLASER 179")), "does not fit"),
+        (lambda lines, i: lines.__setitem__(i, lines[i].replace("FLASER 180", "FLASER 190")), "does not fit"),
+        (lambda lines, i: lines.__setitem__(i, lines[i].replace(" host ", " nan host ", 1)), "FLASER"),
+    ],
+)
+def test_a_bad_line_is_one_error_naming_file_and_line(edit, match, tmp_path, capsys):
+    lines = log_lines(drive()[:10])
+    index = [i for i, line in enumerate(lines) if line.startswith("FLASER")][3]
+    edit(lines, index)
+    log = write_log(tmp_path / "bad.log", lines)
+    bag = tmp_path / "bad.bag"
+    bag.write_bytes(b"kept")
+    assert main(["carmen2bag", str(log), str(bag)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert err[0].startswith(f"ERROR: {log}:{index + 1}: ")
+    assert match in err[0]
+    assert bag.read_bytes() == b"kept"  # nothing written over the old bag on a refused log

@@ -1,0 +1,174 @@
+"""Monte Carlo localisation in the simulated office (core simulator, no ROS): tracking from the true pose,
+convergence from a 2D Pose Estimate 0.5 m / 30 degrees off, global localisation, a kidnapping, and the parts
+(motion sampling, KLD bound, likelihood field, bad input)."""
+
+from __future__ import annotations
+
+import math
+from functools import cache
+
+import numpy as np
+import pytest
+
+from mrs_nav.errors import InvalidInputError
+from mrs_nav.geometry import Pose2D
+from mrs_nav.localisation import BeamScan, LocalisationConfig, ParticleFilter, kld_limit, sample_motion
+from mrs_nav.localisation.sim_drive import Kidnap, drive_and_localise
+from mrs_nav.maps.occupancy_grid import OccupancyGrid
+from mrs_nav.maps.rasterize import rasterize_world
+from mrs_nav.maps.world import World, load_world
+from mrs_nav.motion_model import OdometryNoise
+from mrs_nav.sim import SimulatorConfig
+from mrs_nav.sim.scripted_drive import OFFICE_CORRIDOR_LOOP
+from tests.conftest import WORLDS
+
+START = Pose2D(-5.0, -5.0, 0.0)
+
+
+@cache
+def office() -> tuple[World, OccupancyGrid]:
+    world = load_world(WORLDS / "office.world")
+    return world, rasterize_world(world, 0.05, margin=0.5)
+
+
+def _sim(seed: int) -> SimulatorConfig:
+    return SimulatorConfig(odom_noise=0.01, seed=seed)
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_tracking_from_the_true_pose_stays_within_3_cm_rms(seed: int) -> None:
+    world, grid = office()
+    run = drive_and_localise(
+        world,
+        grid,
+        START,
+        OFFICE_CORRIDOR_LOOP,
+        120.0,
+        config=LocalisationConfig(seed=seed),
+        initial=START,
+        sim_config=_sim(seed),
+    )
+    position, heading = run.rms()
+    assert len(run.times) > 50  # about 24 m driven: an update every 0.2 m
+    assert position <= 0.03
+    assert heading <= math.radians(1.0)
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_converges_from_a_pose_estimate_half_a_metre_and_30_degrees_off(seed: int) -> None:
+    world, grid = office()
+    off = Pose2D(START.x + 0.5 * math.cos(1.0), START.y + 0.5 * math.sin(1.0), math.radians(30.0))
+    run = drive_and_localise(
+        world,
+        grid,
+        START,
+        OFFICE_CORRIDOR_LOOP,
+        20.0,
+        config=LocalisationConfig(seed=seed),
+        initial=off,
+        initial_covariance=(0.25, 0.25, (math.pi / 12.0) ** 2),
+        sim_config=_sim(seed),
+    )
+    assert run.position_errors[0] > 0.1
+    converged = run.converged_at()
+    assert converged is not None
+    assert converged <= 5.0
+
+
+def test_global_localisation_in_the_office_converges_within_60_s_in_9_of_10_seeds() -> None:
+    world, grid = office()
+    times = [
+        drive_and_localise(
+            world,
+            grid,
+            START,
+            OFFICE_CORRIDOR_LOOP,
+            65.0,
+            config=LocalisationConfig(seed=seed),
+            initial=None,
+            sim_config=_sim(seed),
+        ).converged_at()
+        for seed in range(10)
+    ]
+    assert sum(t is not None and t <= 60.0 for t in times) >= 9, times
+
+
+def test_a_kidnapped_robot_is_found_again_within_60_s_in_2_of_3_seeds() -> None:
+    # The office is nearly symmetric under half and quarter turns (walls and doors; only furniture differs), so
+    # a robot put down in another corridor can look where the filter believes it is for a long time; measured
+    # over seeds 1..4 it recovers in 23-32 s in three of four (see bench/RESULTS.md, localisation).
+    world, grid = office()
+    kidnap = Kidnap(20.0, Pose2D(5.0, 0.0, math.pi / 2.0))
+    recovered = 0
+    for seed in (1, 2, 3):
+        run = drive_and_localise(
+            world,
+            grid,
+            START,
+            OFFICE_CORRIDOR_LOOP,
+            85.0,
+            config=LocalisationConfig(seed=seed),
+            initial=START,
+            sim_config=_sim(seed),
+            kidnap=kidnap,
+        )
+        before = run.times <= kidnap.at
+        assert np.all(run.position_errors[before] < 0.1)
+        assert run.position_errors[np.flatnonzero(~before)[0]] > 1.0  # the filter did lose the robot
+        at = run.converged_at(kidnap.at)
+        recovered += at is not None and at - kidnap.at <= 60.0
+    assert recovered >= 2
+
+
+def test_motion_sampling_follows_the_odometry_with_the_alphas_spread() -> None:
+    rng = np.random.default_rng(0)
+    particles = np.zeros((20000, 3))
+    sample_motion(particles, Pose2D(0.0, 0.0, 0.0), Pose2D(1.0, 0.0, 0.0), OdometryNoise(0.0, 0.0, 0.01, 0.0), rng)
+    assert particles[:, 0].mean() == pytest.approx(1.0, abs=0.003)
+    assert particles[:, 0].std() == pytest.approx(0.1, rel=0.03)  # sd = sqrt(a3) * 1 m
+    assert np.all(particles[:, 1] == 0.0)
+    assert np.all(particles[:, 2] == 0.0)
+
+
+def test_kld_bound_grows_with_the_occupied_bins() -> None:
+    limits = kld_limit(np.array([1, 2, 10, 100]), 0.01, 2.326, 5000)
+    assert limits[0] == 5000  # one bin: AMCL keeps drawing
+    assert limits[1] < limits[2] < limits[3]
+    assert limits[3] == pytest.approx(148.0 / 0.02 * 0.8, rel=0.5)  # about chi-square(99) / (2 err)
+
+
+def test_particle_count_adapts_between_the_limits() -> None:
+    world, grid = office()
+    pf = ParticleFilter(grid, LocalisationConfig(seed=0, min_particles=300, max_particles=4000))
+    scan = _scan_at(world, START)
+    pf.global_localisation()
+    assert len(pf.particles) == 4000
+    pf.set_pose(START, np.diag([0.0025, 0.0025, 0.0003]))
+    pf.update(Pose2D(0.0, 0.0, 0.0), scan)
+    assert 300 <= len(pf.particles) < 1000  # a tight cloud needs few particles
+
+
+def _scan_at(world: World, pose: Pose2D) -> BeamScan:
+    from mrs_nav.localisation.sim_drive import beam_scan
+    from mrs_nav.sim import Simulator
+
+    return beam_scan(Simulator(world, SimulatorConfig(), pose).scan_now())
+
+
+def test_bad_input_is_rejected_with_the_parameter_named() -> None:
+    _, grid = office()
+    with pytest.raises(InvalidInputError, match="min_particles"):
+        LocalisationConfig(min_particles=10, max_particles=5)
+    with pytest.raises(InvalidInputError, match="laser_sigma_hit"):
+        LocalisationConfig(laser_sigma_hit=0.0)
+    with pytest.raises(InvalidInputError, match="odom_alpha2"):
+        LocalisationConfig.from_mapping({"odom_alpha2": "high"})
+    with pytest.raises(InvalidInputError, match="unknown localisation parameters: odom_alpha5"):
+        LocalisationConfig.from_mapping({"odom_alpha5": 0.1})
+    with pytest.raises(InvalidInputError, match="occupied"):
+        ParticleFilter(OccupancyGrid(np.zeros((5, 5), dtype=np.int8), 0.05))
+    pf = ParticleFilter(grid, LocalisationConfig(seed=0))
+    with pytest.raises(InvalidInputError, match="covariance"):
+        pf.set_pose(START, np.full((3, 3), math.nan))
+    with pytest.raises(InvalidInputError, match="ranges"):
+        BeamScan(np.ones(3), np.zeros(4), 0.1, 3.5)

@@ -1,0 +1,82 @@
+"""map_server and map_saver under a real master: the served map equals the file, static_map answers, the saver
+writes files that load back identical, and bad files or options end in one ERROR line."""
+
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from mrs_nav.maps.map_io import load_map
+from mrs_nav.ros_processes import process
+from tests.rosharness import REPO, RosMaster, wait_for
+
+pytestmark = pytest.mark.ros
+
+MAP = REPO / "maps" / "simple.yaml"
+
+
+def _rosrun(master: RosMaster, *args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        ["rosrun", "mrs_nav", *args], env=master.env, capture_output=True, text=True, timeout=60, check=False
+    )
+
+
+def test_served_map_equals_the_file_and_the_saver_writes_it_back(
+    ros_master: RosMaster, rospy_node: Any, tmp_path: Path
+) -> None:
+    rospy = rospy_node
+    from nav_msgs.msg import MapMetaData, OccupancyGrid
+    from nav_msgs.srv import GetMap
+
+    expected = load_map(MAP)
+    got: dict[str, Any] = {}
+    subs = [
+        rospy.Subscriber("/map", OccupancyGrid, lambda m: got.setdefault("map", m)),
+        rospy.Subscriber("/map_metadata", MapMetaData, lambda m: got.setdefault("meta", m)),
+    ]
+    with process(["rosrun", "mrs_nav", "map_server", str(MAP)], ros_master.env, tmp_path / "map_server.log"):
+        try:
+            wait_for(lambda: "map" in got and "meta" in got, 30.0, "latched /map and /map_metadata")
+            msg = got["map"]
+            assert msg.header.frame_id == "map"
+            assert (msg.info.width, msg.info.height) == (expected.width, expected.height)
+            assert msg.info.resolution == pytest.approx(expected.resolution)
+            assert msg.info.origin.position.x == pytest.approx(expected.origin[0])
+            served = np.asarray(msg.data, dtype=np.int8).reshape(expected.height, expected.width)
+            assert np.array_equal(served, expected.values)
+            assert got["meta"].width == expected.width
+
+            rospy.wait_for_service("/static_map", timeout=30.0)
+            answer = rospy.ServiceProxy("/static_map", GetMap)().map
+            assert list(answer.data) == list(msg.data)
+
+            saved = _rosrun(ros_master, "map_saver", "-f", str(tmp_path / "saved"), "--occ", "65", "--free", "25")
+            assert saved.returncode == 0, saved.stderr
+        finally:
+            for sub in subs:
+                sub.unregister()
+    again = load_map(tmp_path / "saved.yaml")
+    assert (tmp_path / "saved.pgm").is_file()
+    assert np.array_equal(again.values, expected.values)
+    assert again.origin == pytest.approx(expected.origin)
+
+
+def test_a_missing_map_file_is_one_error_line_naming_it(ros_master: RosMaster, tmp_path: Path) -> None:
+    missing = tmp_path / "nowhere.yaml"
+    result = _rosrun(ros_master, "map_server", str(missing))
+    assert result.returncode == 1
+    errors = [line for line in result.stderr.splitlines() if line.startswith("ERROR:")]
+    assert len(errors) == 1
+    assert str(missing) in errors[0]
+    assert "Traceback" not in result.stderr
+
+
+def test_map_saver_rejects_thresholds_out_of_order(ros_master: RosMaster, tmp_path: Path) -> None:
+    result = _rosrun(ros_master, "map_saver", "-f", str(tmp_path / "x"), "--occ", "20", "--free", "30")
+    assert result.returncode == 1
+    assert result.stderr.strip() == "ERROR: need 0 <= --free (30) < --occ (20) <= 100"
+    assert not (tmp_path / "x.yaml").exists()

@@ -1,0 +1,98 @@
+"""The TurtleBot3 flow end to end under real roslaunch: map the office with SLAM (slam.launch, the test drives
+along the south and east corridors), save the live map with map_saver, then navigation.launch on the saved map
+(map server + localisation + RRT* navigation, a fresh simulator): three goals in other rooms are reached without
+a contact."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from tests.ros.driveharness import Drive
+from tests.ros.navharness import FOOTPRINT_RADIUS, StatusLog, TruthTrack
+from tests.rosharness import RosMaster, wait_for
+
+pytestmark = pytest.mark.ros
+
+MAX_RATE = ("real_time_factor:=0", "lockstep:=true")
+OFFICE = ("world:=office", "x:=-5.0", "y:=-5.0", "yaw:=0.0", "rviz:=false", "seed:=5")
+MAPPING_DRIVE = ((-5.0, -5.0), (5.0, -5.0), (5.0, 3.0))  # along the south and east corridors
+# The south-west room (door at x = -5 in the wall y = -6), then the two southern west rooms (doors at y = -4 and
+# y = 0 in the wall x = -6): each through the corridor and two doors, rooms the mapping drive only glimpsed.
+ROOM_GOALS = ((-4.5, -7.3), (-7.5, -4.0), (-7.0, -1.0))
+
+
+def _go(rospy: Any, goals: tuple[tuple[float, float], ...], truth: TruthTrack, timeout: float) -> None:
+    from geometry_msgs.msg import PoseStamped
+
+    pub = rospy.Publisher("/move_base_simple/goal", PoseStamped, queue_size=1, latch=True)
+    status = StatusLog(rospy, "/rrt_navigation/status")
+    try:
+        wait_for(lambda: pub.get_num_connections() > 0, 60.0, "the navigation node on the goal topic")
+        for x, y in goals:
+            done = len(status.messages)
+            goal = PoseStamped()
+            goal.header.frame_id = "map"
+            goal.pose.position.x, goal.pose.position.y = x, y
+            goal.pose.orientation.w = 1.0
+            pub.publish(goal)
+
+            def finished(done: int = done) -> bool:
+                return any(m.startswith(("reached:", "failed:", "refused:")) for m in status.messages[done:])
+
+            wait_for(finished, timeout, f"goal ({x}, {y})")
+            assert any(m.startswith("reached:") for m in status.messages[done:]), status.messages[done:]
+            _, tx, ty = truth.last()  # type: ignore[misc]
+            assert math.hypot(tx - x, ty - y) <= 0.3
+    finally:
+        pub.unregister()
+        status.close()
+
+
+def test_slam_then_saved_map_then_goals_in_other_rooms(ros_master: RosMaster, rospy_node: Any, tmp_path: Path) -> None:
+    rospy = rospy_node
+    saved = tmp_path / "office"
+    truth = TruthTrack(rospy, "office.world")
+    try:
+        # 4x real time, not lockstep: the test's 10 Hz commands keep up and SLAM sees every scan
+        with ros_master.launch("slam.launch", "real_time_factor:=4", *OFFICE) as proc:
+            wait_for(lambda: proc.poll() is not None or rospy.get_time() > 1.0, 60.0, "the simulation")
+            assert proc.poll() is None, "roslaunch exited"
+            drive = Drive(rospy, MAPPING_DRIVE, loop=False)
+            try:
+                drive.drive(110.0, 120.0)
+            finally:
+                drive.close()
+            result = subprocess.run(
+                ["rosrun", "mrs_nav", "map_saver", "-f", str(saved)],
+                env=ros_master.env,
+                capture_output=True,
+                text=True,
+                timeout=60,
+                check=False,
+            )
+            assert result.returncode == 0, result.stderr
+        assert truth.contacts == 0
+    finally:
+        truth.close()
+
+    truth = TruthTrack(rospy, "office.world")  # a new simulator: contacts count from zero again
+    try:
+        from geometry_msgs.msg import PoseWithCovarianceStamped
+
+        estimates: list[Any] = []
+        amcl = rospy.Subscriber("/amcl_pose", PoseWithCovarianceStamped, estimates.append, queue_size=10)
+        with ros_master.launch("navigation.launch", f"map_file:={saved}.yaml", *MAX_RATE, *OFFICE) as proc:
+            wait_for(lambda: proc.poll() is not None or estimates, 90.0, "the first /amcl_pose on the saved map")
+            assert proc.poll() is None, "roslaunch exited"
+            amcl.unregister()
+            _go(rospy, ROOM_GOALS, truth, 300.0)
+            assert proc.poll() is None, "a required node died"
+        assert truth.contacts == 0
+        assert truth.min_clearance() > FOOTPRINT_RADIUS
+    finally:
+        truth.close()
