@@ -11,6 +11,7 @@ Frames: ``map`` is the frame of the first processed pose's odometry (``map -> od
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,7 +42,9 @@ class ProcessedScan:
 class Slam:
     """Online 2-D SLAM over (odometry pose, laser scan) pairs."""
 
-    def __init__(self, config: SlamConfig | None = None, laser_pose: Pose2D | None = None) -> None:
+    def __init__(
+        self, config: SlamConfig | None = None, laser_pose: Pose2D | None = None, history: int | None = None
+    ) -> None:
         self.config = config or SlamConfig()
         self.laser_pose = laser_pose or Pose2D(0.0, 0.0, 0.0)
         c = self.config
@@ -55,7 +58,9 @@ class Slam:
             max_cells=MAX_MAP_CELLS,
         )
         self.matcher = ScanMatcher(c.sigma, c.search_linear, c.search_angular)
-        self.processed: list[ProcessedScan] = []
+        # Every processed scan, for offline use (replay's trajectory); ``history`` keeps only that many of the
+        # latest (the gates need the last one) so that a run of hours does not grow without end.
+        self.processed: list[ProcessedScan] | deque[ProcessedScan] = [] if history is None else deque(maxlen=history)
         self._map_to_odom = Pose2D(0.0, 0.0, 0.0)
 
     @property

@@ -20,7 +20,6 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from array import array
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -41,6 +40,7 @@ from mrs_nav.sim import Scan, Simulator, SimulatorConfig
 from mrs_nav.slam import Slam, SlamConfig
 from mrs_nav.slam.evaluation import map_iou
 from mrs_nav.slam.sim_drive import laser_scan_data
+from mrs_nav.stack.track import BoundedTrack
 
 matplotlib.use("Agg")  # headless: figures are files, never windows
 import matplotlib.pyplot as plt
@@ -135,7 +135,7 @@ class DemoResult:
     ate_rmse_m: float
     map_iou: float
     grid: OccupancyGrid
-    truth: FloatArray  # (N, 3) ground-truth poses at the control rate
+    truth: FloatArray  # (N, 3) ground-truth poses at the control rate (evenly thinned past 20,000)
     estimate: FloatArray  # (N, 3) SLAM poses at the same times
     paths: tuple[FloatArray, ...]  # every path the navigator adopted, in order
     cross_track_m: FloatArray  # distance of the true position to the path being followed, per control step
@@ -174,14 +174,19 @@ class Demo:
         sim_config = sim_config or SimulatorConfig(odom_noise=config.odom_noise, seed=config.seed)
         self.sim = Simulator(world, sim_config, config.start)
         laser = self.sim.config.laser
-        self.slam = Slam(config.slam, Pose2D(laser.mount_x, laser.mount_y, 0.0))
+        # The stack needs only SLAM's latest processed scan; keeping them all grew memory in long runs.
+        self.slam = Slam(config.slam, Pose2D(laser.mount_x, laser.mount_y, 0.0), history=1)
         planner = rrt_planner(config.planner, config.plan_time_budget_s, config.plan_iterations)
         self.navigator = Navigator(planner, config.navigator, seed=config.seed)
-        # Flat float buffers (x, y, yaw per control tick), not lists of tuples: a third of the memory in long runs.
-        self._truth = array("d")
-        self._estimate = array("d")
-        self._cross = array("d")
-        self._travelled = 0.0  # m, summed as the robot moves (re-summing the whole track per goal grew with the run)
+        # True and estimated pose per control tick (x, y, yaw, x, y, yaw) and the cross-track distance, in bounded
+        # memory (a long run keeps an evenly thinned record); the ATE and the distance travelled are summed as the
+        # robot moves, so they stay exact however long the run.
+        self._poses = BoundedTrack(6)
+        self._cross = BoundedTrack(1)
+        self._last_truth: Pose2D | None = None
+        self._travelled = 0.0  # m
+        self._squared_error = 0.0  # m^2, summed over the control ticks
+        self._ticks = 0
         self._paths: list[FloatArray] = []
         self._last_map = -math.inf
 
@@ -201,20 +206,19 @@ class Demo:
             if progress:
                 progress(self.sim.time)
         grid = slam_grid(self.slam)
-        truth, estimate = np.array(self._truth).reshape(-1, 3), np.array(self._estimate).reshape(-1, 3)
-        errors = np.hypot(*(truth[:, :2] - estimate[:, :2]).T)
+        poses = self._poses.array()
         return DemoResult(
             outcomes=tuple(outcomes),
             collisions=self.sim.contacts.events,
             sim_time_s=self.sim.time,
             wall_time_s=time.perf_counter() - wall0,
-            ate_rmse_m=float(np.sqrt(np.mean(errors**2))) if errors.size else math.nan,
+            ate_rmse_m=math.sqrt(self._squared_error / self._ticks) if self._ticks else math.nan,
             map_iou=map_iou(self.slam.grid, self.world),
             grid=grid,
-            truth=truth,
-            estimate=estimate,
+            truth=poses[:, :3],
+            estimate=poses[:, 3:],
             paths=tuple(self._paths),
-            cross_track_m=np.array(self._cross),
+            cross_track_m=self._cross.array()[:, 0],
         )
 
     def go_to(self, goal: tuple[float, float]) -> GoalOutcome:
@@ -301,13 +305,15 @@ class Demo:
 
     def _track(self, estimate: Pose2D) -> None:
         truth = self.sim.ground_truth()
-        if self._truth:
-            self._travelled += math.hypot(truth.x - self._truth[-3], truth.y - self._truth[-2])
-        self._truth.extend((truth.x, truth.y, truth.yaw))
-        self._estimate.extend((estimate.x, estimate.y, estimate.yaw))
+        if self._last_truth is not None:
+            self._travelled += math.hypot(truth.x - self._last_truth.x, truth.y - self._last_truth.y)
+        self._last_truth = truth
+        self._squared_error += (truth.x - estimate.x) ** 2 + (truth.y - estimate.y) ** 2
+        self._ticks += 1
+        self._poses.append((truth.x, truth.y, truth.yaw, estimate.x, estimate.y, estimate.yaw))
         path = self.navigator.path
         if path is not None and self.navigator.state is GoalState.ACTIVE:
-            self._cross.append(cross_track_distance([truth.x, truth.y], path))
+            self._cross.append((cross_track_distance([truth.x, truth.y], path),))
 
 
 def save_figure(result: DemoResult, path: Path, title: str = "") -> Path:
