@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from typing import Any
 
 import numpy as np
@@ -58,6 +59,18 @@ class TruthTrack:
         """The ``(t, x, y)`` samples stamped at or after sim time ``t``."""
         samples = self.array()
         return samples[samples[:, 0] >= t]
+
+    def moved(self, start: float, end: float, timeout: float = 30.0) -> float:
+        """How far (m) the robot got between sim times ``start`` and ``end``, once samples stamped past ``end``
+        have arrived (this process's callbacks can lag the clock on a loaded machine)."""
+        deadline = time.monotonic() + timeout
+        while (last := self.last()) is None or last[0] < end:
+            if time.monotonic() > deadline:
+                raise AssertionError(f"no ground truth stamped after {end:.2f} s")
+            time.sleep(0.05)
+        samples = self.since(start)
+        samples = samples[samples[:, 0] <= end]
+        return float(math.hypot(*(samples[-1, 1:] - samples[0, 1:])))
 
     def min_clearance(self) -> float:
         """Smallest distance (m) from the robot's centre to an obstacle surface; below the footprint radius the

@@ -4,9 +4,11 @@ a beam return.
 
 :class:`ScanObstacles` keeps a layer of marked cells over the map. Each scan (in the map frame: the laser's
 position and the beam end points, ``hit`` where the beam returned) first clears the marks on the cells every
-beam passed through (up to the cell before its return), then marks the cells of returns that lie farther than
-``map_tolerance_m`` from every occupied cell of the map (so range noise on mapped walls marks nothing). The
-planner then sees the map with the marks as occupied (:meth:`ScanObstacles.apply`).
+beam passed through (up to the cell before its return), then marks the cells of returns that the map has as
+free and that lie farther than ``map_tolerance_m`` from every occupied cell of the map (so range noise on mapped
+walls marks nothing). Returns in unknown cells are left to the map: while SLAM explores they are the walls it is
+about to add, and marking them would re-inflate the planning grid at every scan. The planner then sees the map
+with the marks as occupied (:meth:`ScanObstacles.apply`).
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ class ScanObstacles:
     def __init__(self, map_tolerance_m: float = MAP_TOLERANCE_M) -> None:
         self.map_tolerance_m = map_tolerance_m
         self._raw: OccupancyGrid | None = None
-        self._near_mapped: BoolArray | None = None
+        self._markable: BoolArray | None = None  # free on the map and away from its obstacles
         self.marks: BoolArray | None = None
 
     def set_map(self, raw: OccupancyGrid) -> None:
@@ -40,12 +42,12 @@ class ScanObstacles:
         old, marks = self._raw, self.marks
         self._raw = raw
         reach = max(1, math.ceil(self.map_tolerance_m / raw.resolution))
-        self._near_mapped = ndimage.binary_dilation(raw.occupied_mask, iterations=reach)
+        self._markable = raw.free_mask & ~ndimage.binary_dilation(raw.occupied_mask, iterations=reach)
         self.marks = np.zeros(raw.values.shape, dtype=bool)
         if old is None or marks is None or not marks.any():
             return
         if old.values.shape == raw.values.shape and old.origin == raw.origin and old.resolution == raw.resolution:
-            self.marks = marks & ~self._near_mapped
+            self.marks = marks & self._markable
             return
         rows, cols = np.nonzero(marks)
         self._mark(cell_centres(old, rows, cols))
@@ -55,11 +57,20 @@ class ScanObstacles:
         returns (``hit``, ``(N,)`` bool) not on the map. Whether the marks changed."""
         if self._raw is None or self.marks is None:
             return False
-        raw = self._raw
         o = np.asarray(origin, dtype=np.float64)[:2]
         e = np.asarray(ends, dtype=np.float64).reshape(-1, 2)
         returned = np.asarray(hit, dtype=bool).reshape(-1)
         before = self.marks.copy()
+        if before.any():  # nothing to clear otherwise: the common case costs no ray casting
+            self._clear(o, e, returned)
+        self._mark(e[returned])
+        return not np.array_equal(before, self.marks)
+
+    def _clear(self, o: FloatArray, e: FloatArray, returned: BoolArray) -> None:
+        """Unmark the cells the beams from ``o`` to ``e`` passed through."""
+        assert self._raw is not None
+        assert self.marks is not None
+        raw = self._raw
         # sample each beam every half cell up to one cell short of its return (the whole beam when none)
         lengths = np.hypot(*(e - o).T)
         reach = np.where(returned, lengths - raw.resolution, lengths)
@@ -71,16 +82,14 @@ class ScanObstacles:
             direction = (e - o) / np.maximum(lengths, 1e-9)[:, None]
             rows, cols, inside = raw.cells(o + t[:, None] * direction[beam])
             self.marks[rows[inside], cols[inside]] = False
-        self._mark(e[returned])
-        return not np.array_equal(before, self.marks)
 
     def _mark(self, points: FloatArray) -> None:
         assert self._raw is not None
         assert self.marks is not None
-        assert self._near_mapped is not None
+        assert self._markable is not None
         rows, cols, inside = self._raw.cells(points)
         rows, cols = rows[inside], cols[inside]
-        new = ~self._near_mapped[rows, cols]
+        new = self._markable[rows, cols]
         self.marks[rows[new], cols[new]] = True
 
     def apply(self, raw: OccupancyGrid) -> OccupancyGrid:

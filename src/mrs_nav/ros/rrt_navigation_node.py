@@ -14,7 +14,7 @@ moving (an empty path when it finds none).
 Outputs: ``cmd_vel`` (geometry_msgs/Twist) while a goal is active (and a zero Twist when it ends); with
 ``~heartbeat`` also a zero Twist every control period while idle, which is what paces a simulator in lockstep;
 ``path`` (nav_msgs/Path, frame map, latched); ``move_base/global_costmap/costmap`` (nav_msgs/OccupancyGrid,
-latched, at most once a second: the map as planned on, obstacles marked and inflated); ``~status``
+latched, at most once a second while subscribed: the map as planned on, obstacles marked and inflated); ``~status``
 (std_msgs/String, latched, one per event: ``"<state>: <message>"``).
 
 The robot stops (the goal kept) when the ``map -> odom`` correction is older than ``~correction_freshness`` or
@@ -415,10 +415,13 @@ class RrtNavigationNode:
             handle.set_aborted(MoveBaseResult(), text)
 
     def _due_costmap(self, now: float) -> OccupancyGrid | None:
-        """The planning grid when it changed and the last costmap is old enough (called with the lock held)."""
-        grid = self.navigator.inflated_grid
+        """The planning grid when it changed, the last costmap is old enough and someone listens (a big grid
+        costs tens of ms to serialise: not on every control tick for nobody; called with the lock held)."""
         last, when = self._costmap
-        if grid is None or grid is last or now - when < COSTMAP_PERIOD_S:
+        if now - when < COSTMAP_PERIOD_S or self._costmap_pub.get_num_connections() == 0:
+            return None
+        grid = self.navigator.inflated_grid
+        if grid is None or grid is last:
             return None
         self._costmap = (grid, now)
         return grid
