@@ -3,8 +3,12 @@
 A beam's endpoint, projected from a particle's pose, is scored by its distance ``d`` to the nearest occupied
 cell of the map: ``p = z_hit * exp(-d^2 / (2 sigma^2)) + z_rand / range_max`` (AMCL's form, so that ``p`` of a
 perfect fit is about ``z_hit``), with ``d`` clipped at ``max_dist`` and endpoints off the map scored at that
-distance, as AMCL does. The distance transform (``scipy.ndimage.distance_transform_edt``) is computed once per
-map and ``log p`` per cell once per ``sigma``, so scoring is one table lookup per particle and beam.
+distance, as AMCL does. Unlike AMCL, an endpoint in an unknown cell scores as a hit: a saved SLAM map knows
+little of the rooms the robot only glimpsed, and their walls must not read as misses that make every particle,
+the right ones too, look wrong (the fit collapses and random particles take over: measured, the robot was lost
+10 m off on entering a room). The distance transform
+(``scipy.ndimage.distance_transform_edt``) is computed once per map and ``log p`` per cell once per ``sigma``,
+so scoring is one table lookup per particle and beam.
 """
 
 from __future__ import annotations
@@ -13,7 +17,7 @@ import numpy as np
 from scipy import ndimage
 
 from mrs_nav.geometry import FloatArray
-from mrs_nav.maps.occupancy_grid import OccupancyGrid
+from mrs_nav.maps.occupancy_grid import UNKNOWN, OccupancyGrid
 
 
 class LikelihoodField:
@@ -23,6 +27,7 @@ class LikelihoodField:
         self.grid = grid
         self.z_hit, self.z_rand, self.max_dist, self.range_max = z_hit, z_rand, max_dist, range_max
         distance = ndimage.distance_transform_edt(~grid.occupied_mask) * grid.resolution
+        distance[grid.values == UNKNOWN] = 0.0  # not held against a particle: see the module docstring
         # One extra cell at the end of the flat table holds the off-map distance.
         self._distance = np.append(np.minimum(distance, max_dist).ravel(), max_dist)
         self._off_map = self._distance.size - 1
