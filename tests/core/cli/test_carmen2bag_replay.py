@@ -82,7 +82,7 @@ def test_odometry_noise_is_seeded(excerpt, tmp_path):
         (["carmen2bag", "{log}", "x.bag", "--odom-noise", "1,2"], "--odom-noise: expected 4 numbers"),
         (["carmen2bag", "{log}", "x.bag", "--odom-noise", "0,0,0,0"], "--odom-noise applies to --odom synthetic"),
         (["replay", "missing.bag", "--slam"], "bag missing.bag does not exist"),
-        (["replay", "{bag}", "--slam", "--param", "delta=-1"], "delta must be > 0"),
+        (["replay", "{bag}", "--slam", "--param", "delta=-1"], "delta must be in 0.01..1"),
         (["replay", "{bag}", "--slam"], "has no /scan topic"),
     ],
 )
