@@ -16,6 +16,7 @@ scripted 20 m drive with the core simulator (360-beam scans, 1 % wheel odometry 
 from __future__ import annotations
 
 import argparse
+import os
 import resource
 import sys
 import tempfile
@@ -59,7 +60,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> str:
-    return _intel(args) + ("" if args.no_office else "\n" + _office())
+    body = _intel(args) + ("" if args.no_office else "\n" + _office())
+    # Times on a shared machine depend on the neighbours: say how busy it was.
+    load = os.getloadavg()[0]
+    return body + f"\nLoad average at the end of the run: {load:.1f} on {os.cpu_count()} cores (other jobs running).\n"
 
 
 def _office() -> str:
