@@ -30,6 +30,7 @@ from mrs_nav.maps.map_io import save_map
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.replay.pose_track import PoseTrack
 from mrs_nav.slam.config import MAX_COORDINATE_M, SlamConfig
+from mrs_nav.slam.consistency import free_endpoint_fraction
 from mrs_nav.slam.metrics import TrajectoryErrors, align_se2, trajectory_errors
 from mrs_nav.slam.relations import Relation, relation_errors
 from mrs_nav.slam.slam import Slam
@@ -98,6 +99,9 @@ class SlamReplay:
         return {
             "scans": len(self.estimate),
             "scans_skipped": self.scans_out_of_order + self.scans_rejected,
+            "loops_closed": self.slam.loops_closed,
+            "loops_rejected": self.slam.loops_rejected,
+            "free_endpoint_fraction": free_endpoint_fraction(self.slam),
             "ms_per_scan_median": float(np.median(ms)),
             "ms_per_scan_p95": float(np.percentile(ms, 95)),
             # CPU time, not wall time: on a shared machine the wall clock measures the neighbours.
@@ -164,6 +168,9 @@ def replay_slam(bag: Path, config: SlamConfig, progress: Callable[[int], None] |
             _process(result, *pending.popleft(), odom, truth)
     while pending:
         _process(result, *pending.popleft(), odom, truth)
+    # Loop closure may have corrected poses since they were recorded: the map and the trajectory follow.
+    result.slam.finish()
+    result.estimate = [p.pose for p in result.slam.processed]
     result.cpu_s = time.process_time() - start
     result.wall_s = time.perf_counter() - wall_start
     _check_pairing(bag, result)

@@ -101,6 +101,8 @@ class SlamConfig:
             position spread is ``srr * travelled + srt * turned`` (m) and its heading spread
             ``str * travelled + stt * turned`` (rad), plus a floor of 1 cm and 0.5 degree.
         sigma: standard deviation of the likelihood field (m) used to score a scan against the map.
+        loop_closure: match scans against older parts of the map and optimise a pose graph when a loop
+            closes (:mod:`mrs_nav.slam.slam`).
     """
 
     delta: float = _default("delta")
@@ -125,6 +127,7 @@ class SlamConfig:
     str: float = _default("str")  # gmapping's name; annotations in this class say builtins.str for the type
     stt: float = _default("stt")
     sigma: float = _default("sigma")
+    loop_closure: bool = _default("loop_closure")
 
     def __post_init__(self) -> None:
         for name, (low, high) in LIMITS.items():
@@ -133,8 +136,9 @@ class SlamConfig:
                 raise InvalidInputError(f"SLAM parameter {name} must be a number, got {value!r}")
             if not (math.isfinite(value) and low <= value <= high):
                 raise InvalidInputError(f"SLAM parameter {name} must be in {low:g}..{high:g}, got {value}")
-        if not isinstance(self.map_grows, bool):
-            raise InvalidInputError(f"SLAM parameter map_grows must be true or false, got {self.map_grows!r}")
+        for name in ("map_grows", "loop_closure"):
+            if not isinstance(getattr(self, name), bool):
+                raise InvalidInputError(f"SLAM parameter {name} must be true or false, got {getattr(self, name)!r}")
         if self.xmax - self.xmin < self.delta or self.ymax - self.ymin < self.delta:
             raise InvalidInputError(f"SLAM map extent is empty: x {self.xmin}..{self.xmax}, y {self.ymin}..{self.ymax}")
         cells = math.ceil((self.xmax - self.xmin) / self.delta + 1) * math.ceil(

@@ -1,8 +1,17 @@
-"""SLAM-lite: a gmapping substitute with one pose hypothesis and scan-to-map matching.
+"""SLAM-lite: a gmapping substitute with one pose hypothesis, scan-to-map matching and loop closure.
 
 Each processed scan is predicted from odometry, aligned to the map built so far (:mod:`mrs_nav.slam.matcher`)
 and added to it (:mod:`mrs_nav.slam.grid`). Scans are processed only when the robot has moved or turned enough
 or enough time has passed (gmapping's ``linearUpdate``, ``angularUpdate``, ``temporalUpdate``).
+
+Loop closure (``loop_closure``): every processed scan is a node of a pose graph (:mod:`mrs_nav.slam.posegraph`)
+linked to the previous one by its matched motion. Every :data:`LOOP_EVERY_M` of travel, the scan is matched
+against a submap of the scans taken near the closest older pose that is at least :data:`LOOP_MIN_TRAVEL_M` of
+travel back (within :data:`LOOP_RADIUS_M`), with a wide search and no odometry prior. A match that explains
+at least :data:`LOOP_MIN_INLIERS` of the scan's points is a candidate edge; the graph is optimised with it and
+the edge kept only if every edge then agrees within the gate (else it is rejected as a false candidate). When
+the optimisation moved poses by more than half a cell, the map is rebuilt from the corrected poses, and
+``map -> odom`` follows the corrected latest pose.
 
 Frames: ``map`` is the frame of the first processed pose's odometry (``map -> odom`` starts as identity);
 ``odom`` is the odometry frame; poses of the robot are of its base frame; ``laser_pose`` is base -> laser.
@@ -10,8 +19,8 @@ Frames: ``map`` is the frame of the first processed pose's odometry (``map -> od
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,30 +30,46 @@ from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.slam.config import MAX_COORDINATE_M, MAX_MAP_CELLS, SlamConfig
 from mrs_nav.slam.grid import LogOddsGrid
 from mrs_nav.slam.matcher import DistanceField, MatchResult, ScanMatcher, thin_points
+from mrs_nav.slam.posegraph import Edge, close_loop
 from mrs_nav.slam.scan import BeamSplit, LaserScanData, split_beams
 
 MIN_POINTS = 10  # fewer end points than this: trust odometry, the match would be noise
 FIELD_MAX_DISTANCE = 0.5  # m, truncation of the distance field
 MIN_SPREAD_M = 0.01  # m, floor of the odometry prediction's position spread
 MIN_SPREAD_RAD = math.radians(0.5)  # floor of its heading spread
+LOOP_EVERY_M = 1.0  # m of travel between loop closure attempts
+LOOP_MIN_TRAVEL_M = 8.0  # m of travel back before a pose can close a loop (nearer ones are already in the map)
+LOOP_RADIUS_M = 3.0  # m: how far the older pose may be from the current estimate
+LOOP_SUBMAP_M = 2.0  # m of travel either side of the older pose whose scans make the submap
+LOOP_SEARCH_M = 1.0  # m, half-width of the loop match's search (the drift it can correct)
+LOOP_SEARCH_RAD = math.radians(20.0)
+LOOP_MIN_INLIERS = 0.75  # share of scan points within 1.5 cells of the submap's walls
+LOOP_MIN_SPREAD = 0.1  # weakest-direction constraint of a loop match (see _weakest_constraint): no corridors
+LOOP_MIN_POINTS = 40  # thinned points at least: a scan of a bare corridor end proves nothing
+SEQUENTIAL_SIGMA = (0.03, math.radians(1.0))  # m, rad: scan-to-map matched motion between processed scans
+LOOP_SIGMA = (0.05, math.radians(1.5))  # m, rad: a verified loop match
+LOOP_AFTER_CLOSURE_M = 3.0  # m of travel after a closure before the next attempt (the map there is fresh)
+REBUILD_AFTER_CELLS = 2.0  # rebuild the map once a pose it was built from is this many cells off
 
 
 @dataclass(frozen=True)
 class ProcessedScan:
-    """One processed scan: its time (s), the corrected base pose in the map, the odometry pose, the match."""
+    """One processed scan: its time (s), the corrected base pose in the map, the odometry pose, the match, the
+    laser mounting used, its beams and the path length so far."""
 
     stamp: float
     pose: Pose2D
     odom: Pose2D
     match: MatchResult | None
+    laser_pose: Pose2D = dataclasses.field(default_factory=lambda: Pose2D(0.0, 0.0, 0.0))
+    beams: BeamSplit | None = None  # kept to rebuild the map after loop closure
+    travelled: float = 0.0  # m of path from the first processed scan (by the estimate)
 
 
 class Slam:
     """Online 2-D SLAM over (odometry pose, laser scan) pairs."""
 
-    def __init__(
-        self, config: SlamConfig | None = None, laser_pose: Pose2D | None = None, history: int | None = None
-    ) -> None:
+    def __init__(self, config: SlamConfig | None = None, laser_pose: Pose2D | None = None) -> None:
         self.config = config or SlamConfig()
         self.laser_pose = laser_pose or Pose2D(0.0, 0.0, 0.0)
         c = self.config
@@ -58,9 +83,12 @@ class Slam:
             max_cells=MAX_MAP_CELLS,
         )
         self.matcher = ScanMatcher(c.sigma, c.search_linear, c.search_angular)
-        # Every processed scan, for offline use (replay's trajectory); ``history`` keeps only that many of the
-        # latest (the gates need the last one) so that a run of hours does not grow without end.
-        self.processed: list[ProcessedScan] | deque[ProcessedScan] = [] if history is None else deque(maxlen=history)
+        self.processed: list[ProcessedScan] = []
+        self.edges: list[Edge] = []
+        self.loops_closed = 0
+        self.loops_rejected = 0
+        self._last_loop_attempt = 0.0
+        self._mapped: list[Pose2D] = []  # the pose each processed scan was mapped at
         self._map_to_odom = Pose2D(0.0, 0.0, 0.0)
 
     @property
@@ -111,10 +139,97 @@ class Slam:
         else:
             pose = predicted
         self.grid.integrate(pose.compose(mount), beams)
+        self._mapped.append(pose)
         self._map_to_odom = pose.compose(odom.inverse())
-        record = ProcessedScan(stamp, pose, odom, match)
+        travelled = 0.0
+        if self.processed:
+            last = self.processed[-1]
+            step = pose.relative_to(last.pose)
+            travelled = last.travelled + math.hypot(step.x, step.y)
+            self.edges.append(Edge(len(self.processed) - 1, len(self.processed), step, *SEQUENTIAL_SIGMA))
+        record = ProcessedScan(stamp, pose, odom, match, mount, beams, travelled)
         self.processed.append(record)
-        return record
+        if c.loop_closure and travelled - self._last_loop_attempt >= LOOP_EVERY_M:
+            self._last_loop_attempt = travelled
+            self._try_loop(points)
+        return self.processed[-1]
+
+    def _try_loop(self, points: FloatArray) -> None:
+        """Look for a loop closure of the latest scan (module doc); optimise and rebuild when one holds."""
+        k = len(self.processed) - 1
+        current = self.processed[k]
+        thinned = thin_points(points, self.config.delta)
+        if thinned.shape[0] < LOOP_MIN_POINTS:
+            return
+        old = [r for r in self.processed[:k] if current.travelled - r.travelled >= LOOP_MIN_TRAVEL_M]
+        if not old:
+            return
+        nearest = min(old, key=lambda r: math.hypot(r.pose.x - current.pose.x, r.pose.y - current.pose.y))
+        if math.hypot(nearest.pose.x - current.pose.x, nearest.pose.y - current.pose.y) > LOOP_RADIUS_M:
+            return
+        submap = [r for r in old if abs(r.travelled - nearest.travelled) <= LOOP_SUBMAP_M]
+        sensor_prior = current.pose.compose(current.laser_pose)
+        matched = self._match_submap(submap, thinned, sensor_prior)
+        if matched is None:
+            return
+        match, field = matched
+        if (
+            match.inlier_fraction < LOOP_MIN_INLIERS
+            or _weakest_constraint(field, thinned, match.pose) < LOOP_MIN_SPREAD
+        ):
+            return
+        j = self.processed.index(nearest)
+        found = match.pose.compose(current.laser_pose.inverse())
+        edge = Edge(j, k, found.relative_to(nearest.pose), *LOOP_SIGMA)
+        closed = close_loop([r.pose for r in self.processed], self.edges, edge)
+        if closed is None:
+            self.loops_rejected += 1
+            return
+        self.loops_closed += 1
+        self._last_loop_attempt = current.travelled + LOOP_AFTER_CLOSURE_M - LOOP_EVERY_M
+        self.edges.append(edge)
+        self.processed = [dataclasses.replace(r, pose=p) for r, p in zip(self.processed, closed.poses, strict=True)]
+        self._map_to_odom = self.processed[-1].pose.compose(self.processed[-1].odom.inverse())
+        # Smaller corrections are within what the matcher tolerates; rebuilding costs a pass over every scan.
+        if self.map_lag() > REBUILD_AFTER_CELLS * self.config.delta:
+            self.rebuild_map()
+
+    def map_lag(self) -> float:
+        """How far (m) the poses the map was built from are, at most, from the current estimates."""
+        return max(
+            (math.hypot(m.x - r.pose.x, m.y - r.pose.y) for m, r in zip(self._mapped, self.processed, strict=True)),
+            default=0.0,
+        )
+
+    def finish(self) -> None:
+        """Bring the map up to the latest corrected poses (after the last scan of a log)."""
+        if self.map_lag() > 0.0:
+            self.rebuild_map()
+
+    def _match_submap(
+        self, submap: list[ProcessedScan], points: FloatArray, prior: Pose2D
+    ) -> tuple[MatchResult, DistanceField] | None:
+        """The scan ``points`` matched against a grid of the ``submap`` scans only, without an odometry prior."""
+        c = self.config
+        grid = LogOddsGrid(
+            c.delta, (prior.x - 1.0, prior.y - 1.0, prior.x + 1.0, prior.y + 1.0), max_cells=MAX_MAP_CELLS
+        )
+        for record in submap:
+            if record.beams is not None:
+                grid.integrate(record.pose.compose(record.laser_pose), record.beams)
+        field = _field(grid, points, prior, LOOP_SEARCH_M)
+        if field.empty:
+            return None
+        matcher = ScanMatcher(c.sigma, LOOP_SEARCH_M, LOOP_SEARCH_RAD)
+        return matcher.match(field, points, prior, (1e3, 1e3)), field
+
+    def rebuild_map(self) -> None:
+        """Map every processed scan again at its (corrected) pose."""
+        self.grid.clear()
+        for record in self.processed:
+            if record.beams is not None:
+                self.grid.integrate(record.pose.compose(record.laser_pose), record.beams)
+        self._mapped = [r.pose for r in self.processed]
 
     def _spread(self, odom: Pose2D) -> tuple[float, float]:
         """Standard deviations (m, rad) of the odometry prediction since the last processed scan."""
@@ -128,22 +243,35 @@ class Slam:
 
     def _match(self, points: FloatArray, sensor_prior: Pose2D, spread: tuple[float, float]) -> MatchResult:
         thinned = thin_points(points, self.config.delta)
-        c, s = math.cos(sensor_prior.yaw), math.sin(sensor_prior.yaw)
-        wx = sensor_prior.x + c * thinned[:, 0] - s * thinned[:, 1]
-        wy = sensor_prior.y + s * thinned[:, 0] + c * thinned[:, 1]
-        # The window covers the predicted scan plus the linear search; points that the angular search swings
-        # farther out fall in the padding, where they score nothing, which is what a wrong heading deserves.
-        reach = self.config.search_linear + FIELD_MAX_DISTANCE
-        margin = reach
-        bounds = (
-            float(wx.min()) - margin,
-            float(wy.min()) - margin,
-            float(wx.max()) + margin,
-            float(wy.max()) + margin,
-        )
-        pad = math.ceil(reach / self.config.delta) + 2
-        field = DistanceField(self.grid, bounds, FIELD_MAX_DISTANCE, pad)
+        field = _field(self.grid, thinned, sensor_prior, self.config.search_linear)
         return self.matcher.match(field, thinned, sensor_prior, spread)
+
+
+def _weakest_constraint(field: DistanceField, points: FloatArray, pose: Pose2D) -> float:
+    """How well the surfaces under the matched ``points`` pin the pose in its weakest direction: the smallest
+    eigenvalue of the mean outer product of their normals (0 in a straight corridor, 0.5 in a corner)."""
+    c, s = math.cos(pose.yaw), math.sin(pose.yaw)
+    wx = pose.x + c * points[:, 0] - s * points[:, 1]
+    wy = pose.y + s * points[:, 0] + c * points[:, 1]
+    _, _, normal = field.nearest_surface(wx, wy)
+    normal = normal[np.isfinite(normal)]
+    if normal.size < 3:
+        return 0.0
+    n = np.stack([np.cos(normal), np.sin(normal)], axis=1)
+    return float(np.linalg.eigvalsh(n.T @ n / normal.size)[0])
+
+
+def _field(grid: LogOddsGrid, points: FloatArray, sensor_prior: Pose2D, search_linear: float) -> DistanceField:
+    """The distance field of ``grid`` over the window the scan ``points`` can reach from ``sensor_prior``."""
+    c, s = math.cos(sensor_prior.yaw), math.sin(sensor_prior.yaw)
+    wx = sensor_prior.x + c * points[:, 0] - s * points[:, 1]
+    wy = sensor_prior.y + s * points[:, 0] + c * points[:, 1]
+    # The window covers the predicted scan plus the linear search; points that the angular search swings
+    # farther out fall in the padding, where they score nothing, which is what a wrong heading deserves.
+    reach = search_linear + FIELD_MAX_DISTANCE
+    bounds = (float(wx.min()) - reach, float(wy.min()) - reach, float(wx.max()) + reach, float(wy.max()) + reach)
+    pad = math.ceil(reach / grid.resolution) + 2
+    return DistanceField(grid, bounds, FIELD_MAX_DISTANCE, pad)
 
 
 def _points(beams: BeamSplit) -> FloatArray:

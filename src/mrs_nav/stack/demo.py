@@ -174,8 +174,7 @@ class Demo:
         sim_config = sim_config or SimulatorConfig(odom_noise=config.odom_noise, seed=config.seed)
         self.sim = Simulator(world, sim_config, config.start)
         laser = self.sim.config.laser
-        # The stack needs only SLAM's latest processed scan; keeping them all grew memory in long runs.
-        self.slam = Slam(config.slam, Pose2D(laser.mount_x, laser.mount_y, 0.0), history=1)
+        self.slam = Slam(config.slam, Pose2D(laser.mount_x, laser.mount_y, 0.0))
         planner = rrt_planner(config.planner, config.plan_time_budget_s, config.plan_iterations)
         self.navigator = Navigator(planner, config.navigator, seed=config.seed)
         # True and estimated pose per control tick (x, y, yaw, x, y, yaw) and the cross-track distance, in bounded

@@ -43,6 +43,9 @@ def test_carmen2bag_then_replay(excerpt, tmp_path, capsys):
     assert set(summary) == {
         "scans",
         "scans_skipped",
+        "loops_closed",
+        "loops_rejected",
+        "free_endpoint_fraction",
         "ms_per_scan_median",
         "ms_per_scan_p95",
         "realtime_factor",

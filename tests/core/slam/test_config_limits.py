@@ -27,12 +27,14 @@ def test_node_and_replay_read_the_same_defaults():
     for name in LIMITS:
         assert getattr(config, name) == pytest.approx(shipped[name]), name
     assert config.map_grows == shipped["map_grows"]
+    assert config.loop_closure == shipped["loop_closure"]
     # The node gets its parameters from that same file: slam.launch loads it into the slam node's namespace.
     launch = ET.parse(CHECKOUT / "launch" / "slam.launch").getroot()
     node = next(n for n in launch.iter("node") if n.get("type") == "slam")
     assert node.find("rosparam").get("file") == "$(find mrs_nav)/config/slam.yaml"
     # The node's reading (from_mapping of the ROS params) and replay's (no --param) agree.
-    assert SlamConfig.from_mapping({k: v for k, v in shipped.items() if k in LIMITS or k == "map_grows"}) == config
+    slam_keys = {*LIMITS, "map_grows", "loop_closure"}
+    assert SlamConfig.from_mapping({k: v for k, v in shipped.items() if k in slam_keys}) == config
     assert SlamConfig.from_assignments([]) == config
 
 

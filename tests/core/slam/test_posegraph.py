@@ -1,0 +1,57 @@
+"""The pose graph: a drifting loop closed by one edge; a wrong loop edge does not wreck the trajectory."""
+
+import itertools
+import math
+
+from mrs_nav.geometry import Pose2D
+from mrs_nav.slam.posegraph import Edge, close_loop
+
+
+def square_loop():
+    """A 4 m x 4 m square, 0.5 m steps, 90 degree turns at the corners: 32 poses, back at the start."""
+    truth = [Pose2D(0.0, 0.0, 0.0)]
+    for _ in range(4):
+        for _ in range(8):
+            truth.append(truth[-1].compose(Pose2D(0.5, 0.0, 0.0)))
+        truth[-1] = Pose2D(truth[-1].x, truth[-1].y, truth[-1].yaw + math.pi / 2)
+    return truth
+
+
+def drifted(truth, yaw_bias=0.01):
+    steps = [b.relative_to(a) for a, b in itertools.pairwise(truth)]
+    steps = [Pose2D(s.x, s.y, s.yaw + yaw_bias) for s in steps]
+    poses = [truth[0]]
+    for s in steps:
+        poses.append(poses[-1].compose(s))
+    return steps, poses
+
+
+def error(poses, truth):
+    return max(math.hypot(p.x - t.x, p.y - t.y) for p, t in zip(poses, truth, strict=True))
+
+
+def test_one_loop_edge_removes_the_drift():
+    truth = square_loop()
+    steps, poses = drifted(truth)
+    edges = [Edge(k, k + 1, s, 0.02, 0.02) for k, s in enumerate(steps)]
+    assert error(poses, truth) > 0.2
+    loop = Edge(0, len(truth) - 1, truth[-1].relative_to(truth[0]), 0.02, 0.02)
+    result = close_loop(poses, edges, loop)
+    assert result is not None
+    assert error(result.poses, truth) < 0.05
+
+
+def test_a_wrong_loop_edge_is_outvoted():
+    truth = square_loop()
+    steps, poses = drifted(truth)
+    edges = [Edge(k, k + 1, s, 0.02, 0.02) for k, s in enumerate(steps)]
+    good = [Edge(0, len(truth) - 1, truth[-1].relative_to(truth[0]), 0.02, 0.02)]
+    good.append(Edge(8, 24, truth[24].relative_to(truth[8]), 0.02, 0.02))
+    # A false candidate: pose 4 "seen" 1.5 m off and turned, from pose 20 (a look-alike corridor).
+    wrong = Edge(4, 20, truth[20].relative_to(truth[4]).compose(Pose2D(1.5, 0.0, 0.3)), 0.02, 0.02)
+    for edge in good:
+        closed = close_loop(poses, edges, edge)
+        assert closed is not None
+        poses, edges = closed.poses, [*edges, edge]
+    assert close_loop(poses, edges, wrong) is None
+    assert error(poses, truth) < 0.05
