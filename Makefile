@@ -26,7 +26,7 @@ figures: install
 	$(VENV)/bin/mrs-nav figures --out $(OUT)/figures
 
 bench: install
-	for b in potential-field planners simulator slam navigation replay bridge localisation; do \
+	for b in potential-field planners simulator slam navigation replay replay-batch bridge localisation; do \
 	  $(VENV)/bin/mrs-nav bench $$b || exit 1; done
 
 clean:
