@@ -193,6 +193,8 @@ def test_a_scan_with_nan_angles_is_dropped_with_a_warning(arena: dict[str, Any])
     bad = LaserScan(angle_min=math.nan, angle_increment=math.nan, range_min=0.12, range_max=3.5, ranges=[1.0] * 360)
     bad.header.frame_id = "base_scan"
     wait_for(lambda: scan_pub.get_num_connections() > 0, 20.0, "the navigation node's /scan")
+    # the warning is logged once: be listening to /rosout_agg before it can be
+    wait_for(lambda: log_sub.get_num_connections() > 0, 20.0, "/rosout_agg")
     scan_pub.publish(bad)
     wait_for(lambda: any("dropping scan" in w for w in warnings), 30.0, "the warning about the bad scan")
     scan_pub.unregister()

@@ -109,6 +109,9 @@ def replay_bag(job: BagJob, progress: Callable[[int], None] | None = None) -> tu
         session = replay_session(bag, config, job.plan, progress)
     result = session.slam
     if not result.estimate:
+        skipped = _skipped(session)
+        if skipped:  # every scan refused for its own values: say so, not that odometry was missing
+            raise InvalidInputError(f"bag {job.bag}: no scan could be used: {'; '.join(skipped)}")
         read = result.scans_read
         raise InvalidInputError(f"bag {job.bag}: no scan could be paired with odometry ({read} scans read)")
     job.out_dir.mkdir(parents=True, exist_ok=True)
