@@ -109,6 +109,10 @@ class SlamNode:
         self._last_clock = now
         try:
             scan = scan_data(msg)
+            # NaN (an error) and negative ranges are not returns; +inf is "nothing in range" (REP 117) and clears.
+            if not np.any((scan.ranges >= 0.0) & ~np.isnan(scan.ranges)):
+                rospy.logwarn_throttle(5.0, f"slam: skipping scan at {stamp:.3f}: no range is a number >= 0")
+                return
             odom = self._lookup(self.config.odom_frame, self.config.base_frame, msg.header.stamp)
             mounting = self._mounting(msg.header.frame_id, msg.header.stamp)
             with self._lock:
