@@ -32,6 +32,7 @@ from std_srvs.srv import Empty, EmptyRequest, EmptyResponse
 from mrs_nav.errors import MrsNavError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.ros.conversions import pose_from_transform, pose_msg, transform_stamped
+from mrs_nav.ros.navigation_conversions import publish_unless_shutdown
 from mrs_nav.ros.params import private_param
 from mrs_nav.slam import LaserScanData, Slam, SlamConfig
 
@@ -191,8 +192,8 @@ class SlamNode:
         msg.header.frame_id = self.config.map_frame
         msg.info = info
         msg.data = data.ravel().tolist()
-        self._map_pub.publish(msg)
-        self._meta_pub.publish(info)
+        publish_unless_shutdown(self._map_pub, msg, "slam")
+        publish_unless_shutdown(self._meta_pub, info, "slam")
         self._last_map_time = stamp.to_sec()
 
     def spin(self) -> None:
