@@ -3,7 +3,7 @@
 Each subcommand module exposes ``register(subparsers)``, which adds its parser and sets ``handler`` to a
 typed function returning the exit code. Domain errors (:class:`MrsNavError`), usage errors and files that
 cannot be written become one ``ERROR:`` line and exit 1; exit 2 means only "ran but did not reach the goal";
-anything else is a bug and keeps its traceback. SIGTERM and SIGHUP unwind like Ctrl-C, so temporary folders
+anything else is a bug and keeps its traceback. Ctrl-C, SIGTERM and SIGHUP unwind alike (exit 130), so temporary folders
 are removed and partial outputs closed when the command is killed (SIGKILL cannot be caught).
 
 Only the module of the command being run is imported, so that ``mrs-nav monitor`` works in a monitor-only
@@ -48,8 +48,18 @@ def build_parser(commands: Sequence[str] = SUBCOMMANDS) -> argparse.ArgumentPars
     return parser
 
 
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C, SIGTERM or SIGHUP, caught by :func:`main` and reported as exit 130.
+
+    A subclass rather than ``KeyboardInterrupt`` itself: CPython 3.11 remembers a plain ``KeyboardInterrupt``
+    that passed through ``exec`` of a string (every dataclass and namedtuple is built that way, so a signal
+    during a lazy import does it) and then kills itself with SIGINT at exit even though the exception was
+    caught, turning our 130 into -2. It compares the exception's exact type, so a subclass is never remembered.
+    """
+
+
 def _interrupt(signum: int, _frame: FrameType | None) -> None:
-    raise KeyboardInterrupt(signal.Signals(signum).name)
+    raise Interrupted(signal.Signals(signum).name)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -63,7 +73,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return 1
-    for signum in (signal.SIGTERM, signal.SIGHUP):
+    for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         signal.signal(signum, _interrupt)
     try:
         code: int = args.handler(args)

@@ -179,7 +179,6 @@ class OccupancyGrid:
         return eroded
 
 
-
 def planning_grid(grid: OccupancyGrid, inflation_m: float = BURGER_RADIUS, allow_unknown: bool = True) -> OccupancyGrid:
     """The grid a planner searches: ``grid`` with obstacles grown by ``inflation_m`` (m), and with its unknown
     cells counted as free first when ``allow_unknown`` (move_base's option of that name)."""

@@ -39,6 +39,7 @@ SCAN_TOPIC = "/scan"
 ODOM_TOPIC = "/odom"
 TRUTH_TOPIC = "/ground_truth/odom"
 MAX_UNPAIRED_FRACTION = 0.1
+MIN_TRUTH_FRACTION = 0.9
 
 
 @dataclass
@@ -49,7 +50,9 @@ class SlamReplay:
     stamps: list[float] = field(default_factory=list)
     estimate: list[Pose2D] = field(default_factory=list)
     odometry: list[Pose2D] = field(default_factory=list)
-    truth: list[Pose2D] = field(default_factory=list)
+    # Ground truth at each scan's stamp; None where the bag has none near it (a recording starts its topics one
+    # by one, so the first scans may precede the first truth message).
+    truth: list[Pose2D | None] = field(default_factory=list)
     ms_per_scan: list[float] = field(default_factory=list)
     scans_read: int = 0
     scans_rejected: int = 0
@@ -64,12 +67,19 @@ class SlamReplay:
     wall_s: float = 0.0
     odom_track: PoseTrack = field(default_factory=PoseTrack)
 
+    def truth_pairs(self) -> tuple[list[Pose2D], list[Pose2D]]:
+        """The estimated and true poses of the scans that have ground truth."""
+        pairs = [(e, t) for e, t in zip(self.estimate, self.truth, strict=False) if t is not None]
+        return [e for e, _ in pairs], [t for _, t in pairs]
+
     @property
     def has_truth(self) -> bool:
-        return len(self.truth) == len(self.estimate) >= 2
+        """Truth for at least 2 scans and most of them: an error over a fragment of the run would mislead."""
+        paired = sum(t is not None for t in self.truth)
+        return paired >= 2 and paired >= MIN_TRUTH_FRACTION * len(self.estimate)
 
     def errors(self) -> TrajectoryErrors | None:
-        return trajectory_errors(self.estimate, self.truth) if self.has_truth else None
+        return trajectory_errors(*self.truth_pairs()) if self.has_truth else None
 
     def reject(self, reason: str) -> None:
         """Count a scan that could not be used; the first reason is kept for the user."""
@@ -83,11 +93,10 @@ class SlamReplay:
         estimate = [p.pose for p in self.slam.processed]
         mine = relation_errors(relations, stamps, estimate, self.odom_track.at, self.odometry, offset=offset)
         out: dict[str, Any] = mine.as_dict()
-        if self.has_truth:
+        truth = [t for t in self.truth if t is not None]
+        if len(truth) == len(estimate):
             # The truth's own odometry is unknown: bridge it with the same wheel odometry.
-            floor = relation_errors(
-                relations, stamps, self.truth, self.odom_track.at, self.odometry, offset=mine.offset_s
-            )
+            floor = relation_errors(relations, stamps, truth, self.odom_track.at, self.odometry, offset=mine.offset_s)
             out["relations_reference_trans_mean_m"] = floor.trans_mean_m
             out["relations_reference_rot_mean_deg"] = floor.rot_mean_deg
         return out
@@ -176,8 +185,7 @@ def replay_slam(bag: Path, config: SlamConfig, progress: Callable[[int], None] |
     _check_pairing(bag, result)
     result.bag_duration_s = 0.0 if math.isnan(first_stamp) else last_stamp - first_stamp
     # Ground truth that arrived after its scan (e.g. recorded at a lower rate) is matched now.
-    matched = [truth.at(t) for t in result.stamps]
-    result.truth = [p for p in matched if p is not None] if all(p is not None for p in matched) else []
+    result.truth = [truth.at(t) for t in result.stamps]
     return result
 
 
@@ -226,7 +234,7 @@ def write_outputs(result: SlamReplay, out_dir: Path, name: str = "slam_map") -> 
     csv = out_dir / "trajectory.csv"
     lines = ["stamp,x,y,yaw,odom_x,odom_y,odom_yaw,truth_x,truth_y,truth_yaw"]
     for i, (t, est, od) in enumerate(zip(result.stamps, estimate, result.odometry, strict=True)):
-        gt = result.truth[i] if result.has_truth else None
+        gt = result.truth[i] if i < len(result.truth) else None
         gt_text = f"{gt.x:.4f},{gt.y:.4f},{gt.yaw:.5f}" if gt else ",,"
         lines.append(f"{t:.6f},{est.x:.4f},{est.y:.4f},{est.yaw:.5f},{od.x:.4f},{od.y:.4f},{od.yaw:.5f},{gt_text}")
     csv.write_text("\n".join(lines) + "\n", encoding="utf-8")
@@ -262,8 +270,9 @@ def _plot(result: SlamReplay, estimate: list[Pose2D], png: Path) -> None:
         )
         if result.has_truth:
             # Ground truth is drawn in the map frame: the rigid fit of truth onto the estimate.
-            gt = np.array([[p.x, p.y] for p in result.truth])
-            angle, shift = align_se2(gt, est)
+            paired_estimate, paired_truth = result.truth_pairs()
+            gt = np.array([[p.x, p.y] for p in paired_truth])
+            angle, shift = align_se2(gt, np.array([[p.x, p.y] for p in paired_estimate]))
             c, s = math.cos(angle), math.sin(angle)
             ax.plot(
                 c * gt[:, 0] - s * gt[:, 1] + shift[0],

@@ -1,4 +1,4 @@
-"""A command killed with SIGTERM (or SIGHUP) unwinds: its temporary folder is removed and it says so in one line."""
+"""Ctrl-C, SIGTERM or SIGHUP unwind a command: its temporary folder is removed and it says so in one line."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from tests.rosharness import REPO
 BAG = REPO / "tests" / "data" / "bags" / "office.bag"
 
 
-@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGHUP])
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
 def test_killed_replay_removes_its_temporary_folder(tmp_path: Path, signum: signal.Signals) -> None:
     # An unindexed copy, so that replay rebuilds it inside its temporary folder before the SLAM run.
     data = bytearray(BAG.read_bytes())

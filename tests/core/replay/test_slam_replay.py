@@ -17,7 +17,8 @@ from tests.core.slam.synthetic import cast
 MOUNT = Pose2D(-0.032, 0.0, 0.0)
 
 
-def write_bag(path, with_truth):
+def write_bag(path, with_truth, truth_from=0):
+    """30 scans; ground truth (when ``with_truth``) from scan ``truth_from`` on, as a recording started late."""
     truth = [Pose2D(-2.0 + 0.1 * i, 0.3 * math.sin(0.1 * i), 0.05 * i) for i in range(30)]
     rng = np.random.default_rng(0)
     with BagWriter(path) as writer:
@@ -33,7 +34,7 @@ def write_bag(path, with_truth):
             writer.write("/scan", LASER_SCAN, round(t * 1e9), laser_scan_message(scan, t, "base_scan"))
             msg = odometry_message(odom, t, "odom", "base_footprint")
             writer.write("/odom", ODOMETRY, round(t * 1e9) + 1000, msg)
-            if with_truth:
+            if with_truth and i >= truth_from:
                 writer.write(
                     "/ground_truth/odom", ODOMETRY, round(t * 1e9), odometry_message(gt, t, "map", "base_footprint")
                 )
@@ -58,6 +59,22 @@ def test_replay_pairs_every_scan_and_tracks_the_truth(tmp_path):
     assert errors is not None
     assert errors.ate_rmse_m < 0.02
     assert errors.rpe_trans_mean_m < 0.01
+
+
+def test_truth_that_starts_after_the_first_scans_still_measures_the_rest(tmp_path):
+    bag = tmp_path / "late.bag"
+    write_bag(bag, with_truth=True, truth_from=2)
+    result = replay_slam(bag, SlamConfig(linearUpdate=0.0, angularUpdate=0.0))
+    assert [t is None for t in result.truth[:3]] == [True, True, False]
+    errors = result.errors()
+    assert errors is not None
+    assert errors.ate_rmse_m < 0.02
+
+
+def test_truth_for_a_fragment_of_the_run_is_no_measure(tmp_path):
+    bag = tmp_path / "fragment.bag"
+    write_bag(bag, with_truth=True, truth_from=20)
+    assert replay_slam(bag, SlamConfig(linearUpdate=0.0, angularUpdate=0.0)).errors() is None
 
 
 def test_replay_without_ground_truth_gives_null_errors(tmp_path, capsys):
