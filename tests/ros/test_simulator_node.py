@@ -118,7 +118,9 @@ def test_cmd_vel_moves_the_robot_and_the_watchdog_stops_it(simulation: Any) -> N
 
     truth = Recorder(rospy, "/ground_truth/odom", Odometry, lambda m: [m.header.stamp.to_sec()])
     odom = Recorder(rospy, "/odom", Odometry, lambda m: [m.header.stamp.to_sec()])
-    pub = rospy.Publisher("/cmd_vel", Twist, queue_size=10)
+    # queue_size=1: on a loaded machine a backlog of queued commands would keep the robot driving after the
+    # last one was sent, and the distance below would measure the backlog, not the watchdog.
+    pub = rospy.Publisher("/cmd_vel", Twist, queue_size=1)
     try:
         wait_for(lambda: truth.last is not None and odom.last is not None, 30.0, "/ground_truth/odom and /odom")
         start_x = truth.last.pose.pose.position.x
@@ -126,6 +128,7 @@ def test_cmd_vel_moves_the_robot_and_the_watchdog_stops_it(simulation: Any) -> N
         broken.linear.x = math.nan
         for _ in range(5):
             pub.publish(broken)  # logged and ignored: the node must live on and obey the next good command
+            time.sleep(0.01)  # one at a time through the queue of 1
         forward = Twist()
         forward.linear.x = 0.2
 
