@@ -47,7 +47,7 @@ def wait_bridge_up(session: zenoh.Session, proc: Any, what: str) -> None:
 
 
 class Router:
-    """A Zenoh router subprocess on a fixed endpoint, restartable."""
+    """``mrs-nav router`` in a subprocess on a fixed endpoint, restartable."""
 
     def __init__(self) -> None:
         self.endpoint = f"tcp/127.0.0.1:{free_port()}"
@@ -55,14 +55,14 @@ class Router:
 
     def start(self) -> None:
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "tests.ros.zenoh_router", self.endpoint],
+            [sys.executable, "-m", "mrs_nav", "router", "--listen", self.endpoint],
             cwd=REPO,
-            env={**os.environ, "PYTHONPATH": f"{REPO / 'src'}:{REPO}"},
+            env={**os.environ, "PYTHONPATH": str(REPO / "src")},
             stdout=subprocess.PIPE,
             start_new_session=True,
         )
         assert self.proc.stdout is not None
-        assert self.proc.stdout.readline().strip() == b"up"
+        assert self.proc.stdout.readline().decode() == f"zenoh router listening on {self.endpoint}\n"
 
     def kill(self) -> None:
         if self.proc is not None:

@@ -22,6 +22,7 @@ import sys
 import tempfile
 import threading
 import time
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -65,17 +66,17 @@ def _tls_files(tmp: Path) -> tuple[Path, Path]:
     return bridge, remote
 
 
-def _cpu_seconds(pid: int) -> float:
+def cpu_seconds(pid: int) -> float:
     """User + system CPU time (s) of process ``pid`` from /proc."""
     fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-class _Receiver:
-    """Zenoh receive times (wall clock, s) per topic and header.seq."""
+class Receiver:
+    """Zenoh receive times (wall clock, s) per ROS topic (the key without its first chunk) and header.seq."""
 
-    def __init__(self) -> None:
-        self.times: dict[str, dict[int, float]] = {t: {} for t in TOPICS}
+    def __init__(self, topics: Iterable[str] = TOPICS) -> None:
+        self.times: dict[str, dict[int, float]] = {t: {} for t in topics}
         self.lock = threading.Lock()
 
     def __call__(self, sample: Any) -> None:
@@ -101,7 +102,7 @@ def _measure(tmp: Path, duration: float) -> str:
     config.write_text(
         json.dumps({"mode": "router", "listen": [endpoint], "zenoh_config": str(bridge_tls), "discovery_period": 0.2})
     )
-    receivers = [_Receiver() for _ in range(SUBSCRIBERS)]
+    receivers = [Receiver() for _ in range(SUBSCRIBERS)]
     rss: list[tuple[float, float]] = []
     with roscore(tmp) as env:
         bridge_cmd = [sys.executable, str(CHECKOUT / "scripts" / "zenoh_bridge"), f"_config_file:={config}"]
@@ -113,13 +114,13 @@ def _measure(tmp: Path, duration: float) -> str:
                 out = tmp / "peer.json"
                 peer_cmd = [sys.executable, "-m", "mrs_nav.ros.bridge_bench_peer", "--out", str(out)]
                 with process([*peer_cmd, "--duration", str(duration)], env, tmp / "peer.log") as peer:
-                    cpu0, wall0 = _cpu_seconds(bridge.pid), time.monotonic()
+                    cpu0, wall0 = cpu_seconds(bridge.pid), time.monotonic()
                     while peer.poll() is None:
                         if time.monotonic() - wall0 > duration + 120:
                             raise RosProcessError("bench bridge: the ROS peer did not finish in time")
                         rss.append((time.monotonic() - wall0, rss_mb(bridge.pid)))
                         time.sleep(1.0)
-                    cpu = (_cpu_seconds(bridge.pid) - cpu0) / (time.monotonic() - wall0) * 100
+                    cpu = (cpu_seconds(bridge.pid) - cpu0) / (time.monotonic() - wall0) * 100
             finally:
                 for session in sessions:
                     session.close()  # type: ignore[no-untyped-call]

@@ -16,7 +16,15 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import Any
 
-from mrs_nav.bridge.keys import KeyLayout, data_pattern, discovery_pattern, publish_key, services_pattern, topic_key
+from mrs_nav.bridge.keys import (
+    STATUS_SUFFIX,
+    KeyLayout,
+    data_pattern,
+    discovery_pattern,
+    publish_key,
+    services_pattern,
+    topic_key,
+)
 
 # Zenoh's ACL message kinds (zenoh 1.x).
 _ALL = [
@@ -36,7 +44,10 @@ def access_control(
     """
     data = [data_pattern(prefix, layout), f"{data_pattern(prefix, layout)}/@adv/**"]
     services = services_pattern(prefix)
-    observed = [*data, f"{services}/@types/**", f"{services}/@bridge/status"]
+    # Status queries may name any prefix (``**/@bridge/status``: Zenoh's ACL admits a query only when its whole
+    # key expression lies inside an allowed one): that is how a fleet monitor finds every robot behind a router.
+    # The bridge still answers with its own status only.
+    observed = [*data, f"{services}/@types/**", f"**{STATUS_SUFFIX}"]
     outgoing = [*data, f"{services}/@types/**", f"{services}/@bridge/**"]
     if layout is KeyLayout.ZENOH_BRIDGE_ROS1:
         observed.append(discovery_pattern())

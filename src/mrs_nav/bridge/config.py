@@ -32,6 +32,13 @@ DEFAULT_INBOUND_RATE = 2.0
 _ENDPOINT = re.compile(r"^(tcp|udp|tls|quic|ws|unixsock-stream)/\S+$")
 
 
+def check_endpoint(endpoint: str) -> str:
+    """Return ``endpoint`` if it reads as a Zenoh locator (PROTO/ADDRESS), else raise InvalidInputError."""
+    if not _ENDPOINT.match(endpoint):
+        raise InvalidInputError(f"endpoint {endpoint!r}: expected PROTO/ADDRESS, e.g. tcp/127.0.0.1:7447")
+    return endpoint
+
+
 def _compile(patterns: Iterable[str], what: str) -> tuple[re.Pattern[str], ...]:
     out = []
     for pattern in patterns:
@@ -113,8 +120,7 @@ class BridgeConfig:
         if self.mode not in MODES:
             raise InvalidInputError(f"mode {self.mode!r}: expected one of {', '.join(MODES)}")
         for endpoint in (*self.listen, *self.connect):
-            if not _ENDPOINT.match(endpoint):
-                raise InvalidInputError(f"endpoint {endpoint!r}: expected PROTO/ADDRESS, e.g. tcp/127.0.0.1:7447")
+            check_endpoint(endpoint)
         if not self.listen and not self.connect:
             raise InvalidInputError("listen and connect are both empty: the bridge would reach nobody")
         if not robot_prefix(self.prefix, self.namespace) and self.layout is KeyLayout.MRS_NAV:
@@ -135,6 +141,22 @@ class BridgeConfig:
     def key_prefix(self) -> str:
         """``prefix`` joined with the robot namespace, e.g. ``mrs_nav/robot1``."""
         return robot_prefix(self.prefix, self.namespace)
+
+    def ros_topic(self, topic: str) -> str:
+        """The ROS name of the robot's ``topic``: ``/odom`` of the robot in namespace ``tb3_0`` is ``/tb3_0/odom``.
+
+        Keys, filters, rate limits and inbound rules name topics as the robot sees them, so that every robot of a
+        fleet is watched and commanded with the same names under its own key prefix."""
+        namespace = self.namespace.strip("/")
+        return f"/{namespace}{topic}" if namespace else topic
+
+    def robot_topic(self, ros_topic: str) -> str | None:
+        """Inverse of :meth:`ros_topic`; None for a topic outside the robot's namespace (another robot's)."""
+        namespace = self.namespace.strip("/")
+        if not namespace:
+            return ros_topic
+        head = f"/{namespace}/"
+        return ros_topic[len(head) - 1 :] if ros_topic.startswith(head) else None
 
     def max_rate(self, topic: str) -> float:
         """Maximum outbound rate of ``topic`` in Hz (0 = unlimited)."""

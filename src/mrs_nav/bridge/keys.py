@@ -119,9 +119,12 @@ def publish_key(prefix: str, topic: str) -> str:
     return f"{prefix}/@bridge/publish/{check_topic(topic).strip('/')}"
 
 
+STATUS_SUFFIX = "/@bridge/status"
+
+
 def status_key(prefix: str) -> str:
     """Key of the queryable answering the bridge's status (JSON, see :mod:`.wire`)."""
-    return f"{services_pattern(prefix)}/@bridge/status"
+    return f"{services_pattern(prefix)}{STATUS_SUFFIX}"
 
 
 def topic_of_publish_key(prefix: str, key: str) -> str:

@@ -88,10 +88,17 @@ class RemoteMonitor:
         self._stats: dict[str, TopicStats] = {}
         self._alive: set[str] = set()
         self._session: zenoh.Session | None = None
+        self._owns_session = False
         self._entities: list[Any] = []
 
     def open(self) -> RemoteMonitor:
-        session = open_client_session(self.connect, self.mode, self.config_file)
+        """Open a session of our own on ``connect`` and watch through it."""
+        self.attach(open_client_session(self.connect, self.mode, self.config_file))
+        self._owns_session = True
+        return self
+
+    def attach(self, session: zenoh.Session) -> RemoteMonitor:
+        """Watch through an open session (a fleet's shared one), which :meth:`close` leaves open."""
         self._session = session
         pattern = f"{self.prefix}/**"
         self._entities = [
@@ -105,7 +112,7 @@ class RemoteMonitor:
 
     def close(self) -> None:
         session, self._session = self._session, None
-        if session is not None:
+        if session is not None and self._owns_session:
             session.close()  # type: ignore[no-untyped-call]
 
     def __enter__(self) -> RemoteMonitor:

@@ -23,6 +23,7 @@ BENCHMARKS = {
     "replay": "replay",
     "replay-batch": "replay_batch",
     "bridge": "bridge",
+    "fleet": "fleet",
     "soak": "soak",
     "localisation": "localisation",
 }

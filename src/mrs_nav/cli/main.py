@@ -25,7 +25,7 @@ from mrs_nav import __version__
 from mrs_nav.cli.common import Parser, fail
 from mrs_nav.errors import MrsNavError
 
-SUBCOMMANDS = ("demo", "figures", "plan", "replay", "carmen2bag", "bench", "monitor")
+SUBCOMMANDS = ("demo", "figures", "plan", "replay", "carmen2bag", "bench", "monitor", "router")
 
 
 def build_parser(commands: Sequence[str] = SUBCOMMANDS) -> argparse.ArgumentParser:

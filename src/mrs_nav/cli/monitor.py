@@ -1,8 +1,9 @@
-"""``mrs-nav monitor``: watch a robot through the Zenoh bridge, with no ROS installed.
+"""``mrs-nav monitor``: watch a robot, or a whole fleet, through the Zenoh bridge, with no ROS installed.
 
 Needs only eclipse-zenoh and rosbags (``pip install "mrs_nav[monitor]"``): topics are discovered through the
 bridge's liveliness tokens, their definitions fetched from its ``@types`` queryable and the messages decoded
-with rosbags.
+with rosbags. With ``--fleet`` every bridge under the prefix (one per robot, joined through a router) is found
+and shown in one dashboard and one snapshot; ``--robot`` names the one a goal is for.
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -35,7 +37,15 @@ def register(subparsers: Any) -> None:
         metavar="ENDPOINT",
         help="Zenoh endpoint of the bridge or a router, e.g. tcp/127.0.0.1:7447 (repeatable)",
     )
-    parser.add_argument("--prefix", default="mrs_nav", help="key prefix of the robot (default: mrs_nav)")
+    parser.add_argument(
+        "--prefix", default="mrs_nav", help="key prefix of the robot, or with --fleet of all robots (default: mrs_nav)"
+    )
+    parser.add_argument(
+        "--fleet", action="store_true", help="watch every robot whose bridge answers under --prefix (one per robot)"
+    )
+    parser.add_argument(
+        "--robot", default=None, metavar="NAME", help="with --fleet: the robot --send-goal is for (e.g. tb3_1)"
+    )
     parser.add_argument(
         "--mode", choices=("peer", "client"), default="peer", help="Zenoh mode (client when the bridge is a router)"
     )
@@ -64,37 +74,84 @@ def run(args: argparse.Namespace) -> int:
 
     if args.duration is not None and args.duration < 0:
         raise InvalidInputError(f"--duration {args.duration}: expected seconds >= 0")
+    if args.robot is not None and not args.fleet:
+        raise InvalidInputError("--robot names a robot of a fleet: add --fleet (or give its --prefix alone)")
     goal = parse_floats(args.send_goal, 3, "--send-goal") if args.send_goal else None
     connect = [e.strip() for item in args.connect for e in item.split(",") if e.strip()]
+    if args.fleet:
+        return _run_fleet(args, connect, goal)
     with RemoteMonitor(connect, args.prefix, args.timeout, args.mode, args.zenoh_config) as monitor:
         monitor.status()  # no bridge answering: one ERROR line, exit 1
-        if goal is not None:
-            accepted, answer = monitor.send_goal(goal[0], goal[1], goal[2], frame=args.frame)
-            if not accepted:
-                print(f"ERROR: goal not sent: {answer}", file=sys.stderr)
-                return 1
-            print(f"goal ({goal[0]:g}, {goal[1]:g}, {goal[2]:g}) sent: {answer}")
-            if args.duration is None and not args.once:
-                return 0
-        summary = _watch(monitor, args)
+        if goal is not None and not _send_goal(monitor, goal, args.frame):
+            return 1
+        if goal is not None and args.duration is None and not args.once:
+            return 0
+        title = f"mrs-nav monitor: {monitor.prefix} via {', '.join(monitor.connect)}"
+        summary = _watch(lambda: _summary(monitor), _render_one, title, args)
         if args.snapshot is not None:
-            _snapshot(monitor, args.snapshot)
+            _snapshot({monitor.prefix: monitor}, args.snapshot)
     if args.json:
         print_json(summary)
     return 0
 
 
-def _watch(monitor: Any, args: argparse.Namespace) -> dict[str, Any]:
-    """Redraw until the duration is over (forever without one); return the last summary."""
+def _run_fleet(args: argparse.Namespace, connect: list[str], goal: tuple[float, ...] | None) -> int:
+    from mrs_nav.bridge.fleet import FleetMonitor  # noqa: PLC0415
+
+    with FleetMonitor(connect, args.prefix, args.timeout, args.mode, args.zenoh_config) as fleet:
+        if goal is not None:
+            if args.robot is None and len(fleet.robots) > 1:
+                raise InvalidInputError(f"--send-goal to which robot? add --robot NAME ({', '.join(fleet.robots)})")
+            target = fleet.robot(args.robot) if args.robot is not None else next(iter(fleet.robots.values()))
+            if not _send_goal(target, goal, args.frame):
+                return 1
+            if args.duration is None and not args.once:
+                return 0
+        title = f"mrs-nav monitor: {len(fleet.robots)} robot(s) under {fleet.root!r} via {', '.join(connect)}"
+        summary = _watch(
+            lambda: {"robots": {name: _summary(m) for name, m in fleet.robots.items()}}, _render_fleet, title, args
+        )
+        if args.snapshot is not None:
+            _snapshot(fleet.robots, args.snapshot)
+    if args.json:
+        print_json(summary)
+    return 0
+
+
+def _send_goal(monitor: Any, goal: tuple[float, ...], frame: str) -> bool:
+    accepted, answer = monitor.send_goal(goal[0], goal[1], goal[2], frame=frame)
+    if not accepted:
+        print(f"ERROR: goal not sent: {answer}", file=sys.stderr)
+        return False
+    print(f"goal ({goal[0]:g}, {goal[1]:g}, {goal[2]:g}) sent to {monitor.prefix}: {answer}")
+    return True
+
+
+def _render_one(summary: dict[str, Any], title: str) -> str:
     from mrs_nav.bridge.dashboard import render  # noqa: PLC0415
 
+    return render(summary, title)
+
+
+def _render_fleet(summary: dict[str, Any], title: str) -> str:
+    from mrs_nav.bridge.dashboard import render  # noqa: PLC0415
+
+    return "\n\n".join([title, *(render(s, f"== {name} ==") for name, s in summary["robots"].items())])
+
+
+def _watch(
+    summarise: Callable[[], dict[str, Any]],
+    render: Callable[[dict[str, Any], str], str],
+    title: str,
+    args: argparse.Namespace,
+) -> dict[str, Any]:
+    """Redraw until the duration is over (forever without one); return the last summary."""
     live = sys.stdout.isatty() and not args.json and not args.once
     start = time.monotonic()
     wait = args.duration if args.duration is not None else (2.0 if args.once else None)
-    title = f"mrs-nav monitor: {monitor.prefix} via {', '.join(monitor.connect)}"
     while True:
         done = wait is not None and time.monotonic() - start >= wait
-        summary = _summary(monitor)
+        summary = summarise()
         if live:
             sys.stdout.write(_CLEAR + render(summary, title) + "\n")
             sys.stdout.flush()
@@ -127,14 +184,19 @@ def _summary(monitor: Any) -> dict[str, Any]:
     return summary
 
 
-def _snapshot(monitor: Any, out: Path) -> None:
-    from mrs_nav.bridge.snapshot import draw_snapshot  # noqa: PLC0415
+def _snapshot(monitors: Mapping[str, Any], out: Path) -> None:
+    """One PNG: a panel per robot (each robot's map is in its own map frame)."""
+    from mrs_nav.bridge.snapshot import RobotView, draw_snapshot  # noqa: PLC0415
 
-    def get(topic: str) -> Any:
+    def get(monitor: Any, topic: str) -> Any:
         try:
             return monitor.latest(topic)
         except MrsNavError:
             return None
 
-    draw_snapshot(out, get("/map"), get("/odom"), get("/path"), get("/move_base_simple/goal"))
+    views = {
+        name: RobotView(get(m, "/map"), get(m, "/odom"), get(m, "/path"), get(m, "/move_base_simple/goal"))
+        for name, m in monitors.items()
+    }
+    draw_snapshot(out, views)
     print(f"snapshot written to {out}", file=sys.stderr)

@@ -1,4 +1,5 @@
-"""The ROS side of ``mrs-nav bench bridge``: publishes /odom, /scan and /map and subscribes to them directly.
+"""The ROS side of ``mrs-nav bench bridge`` and ``bench fleet``: publishes /odom, /scan and /map (once per robot
+namespace with ``--namespaces tb3_0,tb3_1``) and subscribes to them directly.
 
 Run as ``python -m mrs_nav.ros.bridge_bench_peer --out FILE [--duration S]`` against a running master. It
 waits until the bridge and its own subscribers are connected, publishes a one-second warm-up, then the
@@ -21,8 +22,8 @@ from sensor_msgs.msg import LaserScan
 WARMUP = 1.0  # s published before measuring, so every connection is established
 
 
-def make_messages() -> dict[str, tuple[Any, Any, float]]:
-    """topic -> (type, message, rate Hz) with the sizes the real stack produces."""
+def make_messages(namespace: str = "") -> dict[str, tuple[Any, Any, float]]:
+    """topic -> (type, message, rate Hz) with the sizes the real stack produces, under ``/namespace``."""
     scan = LaserScan()
     scan.header.frame_id = "base_scan"
     scan.angle_min, scan.angle_max, scan.angle_increment = 0.0, 6.2657, 0.01745
@@ -38,7 +39,12 @@ def make_messages() -> dict[str, tuple[Any, Any, float]]:
     odom = Odometry()
     odom.header.frame_id, odom.child_frame_id = "odom", "base_footprint"
     odom.pose.pose.orientation.w = 1.0
-    return {"/odom": (Odometry, odom, 100.0), "/scan": (LaserScan, scan, 5.0), "/map": (OccupancyGrid, grid, 1.0)}
+    ns = f"/{namespace}" if namespace else ""
+    return {
+        f"{ns}/odom": (Odometry, odom, 100.0),
+        f"{ns}/scan": (LaserScan, scan, 5.0),
+        f"{ns}/map": (OccupancyGrid, grid, 1.0),
+    }
 
 
 def main() -> None:
@@ -46,9 +52,10 @@ def main() -> None:
     parser.add_argument("--out", required=True)
     parser.add_argument("--duration", type=float, default=60.0)
     parser.add_argument("--connections", type=int, default=2, help="subscribers to wait for per topic")
+    parser.add_argument("--namespaces", default="", help="comma-separated robot namespaces (default: none)")
     args = parser.parse_args(rospy.myargv()[1:])
     rospy.init_node("bridge_bench_peer", disable_signals=True)
-    messages = make_messages()
+    messages = {t: m for ns in args.namespaces.split(",") for t, m in make_messages(ns.strip()).items()}
     received: dict[str, dict[int, float]] = {t: {} for t in messages}
 
     def on_msg(msg: Any, topic: str) -> None:
@@ -58,7 +65,9 @@ def main() -> None:
         rospy.Subscriber(t, typ, on_msg, callback_args=t, queue_size=1000, tcp_nodelay=True)
         for t, (typ, _, _) in messages.items()
     ]
-    pubs = {t: rospy.Publisher(t, typ, queue_size=1000, latch=(t == "/map")) for t, (typ, _, _) in messages.items()}
+    pubs = {
+        t: rospy.Publisher(t, typ, queue_size=1000, latch=t.endswith("/map")) for t, (typ, _, _) in messages.items()
+    }
     deadline = time.monotonic() + 60.0
     while any(p.get_num_connections() < args.connections for p in pubs.values()):
         if time.monotonic() > deadline:

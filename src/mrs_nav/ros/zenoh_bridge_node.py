@@ -78,9 +78,11 @@ def load_config() -> BridgeConfig:
 
 @dataclass
 class _Outbound:
-    """One bridged ROS topic: its ROS subscriber, Zenoh publisher, liveliness token and limiter."""
+    """One bridged ROS topic: its ROS subscriber, Zenoh publisher, liveliness token and limiter. ``topic`` is
+    the name the robot knows it by (keys, status, logs), ``ros_topic`` the one on the master (namespaced)."""
 
     topic: str
+    ros_topic: str
     type: str
     limiter: RateLimiter
     subscriber: Any = None
@@ -139,7 +141,7 @@ class ZenohBridgeNode:
             msg_class = get_message_class(rule.type)
             if msg_class is None:
                 raise MrsNavError(f"inbound {rule.topic}: message type {rule.type} is not installed")
-            publisher = rospy.Publisher(rule.topic, msg_class, queue_size=10)
+            publisher = rospy.Publisher(self.config.ros_topic(rule.topic), msg_class, queue_size=10)
             self._inbound[rule.topic] = _Inbound(rule, publisher, msg_class, RateLimiter(rule.max_rate))
         self._tick()
         # A wall-clock loop, not rospy.Timer: discovery and reconnection must go on when /clock is absent
@@ -235,39 +237,43 @@ class ZenohBridgeNode:
                 out.subscriber.unregister()
                 out.subscriber = self._subscribe(out)
                 out.suspect = 0
-        for topic, inbound in self._inbound.items():
-            if me not in publishing.get(topic, set()):
-                rospy.logwarn("zenoh bridge: the master does not list our publisher of %s; registering again", topic)
+        for inbound in self._inbound.values():
+            ros_topic = self.config.ros_topic(inbound.rule.topic)
+            if me not in publishing.get(ros_topic, set()):
+                rospy.logwarn(
+                    "zenoh bridge: the master does not list our publisher of %s; registering again", ros_topic
+                )
                 inbound.publisher.unregister()
-                inbound.publisher = rospy.Publisher(topic, inbound.msg_class, queue_size=10)
+                inbound.publisher = rospy.Publisher(ros_topic, inbound.msg_class, queue_size=10)
 
-    def _bridge(self, topic: str, type_name: str) -> None:
-        if topic in self._unbridgeable or not self.config.topics.accepts(topic) or not type_name:
+    def _bridge(self, ros_topic: str, type_name: str) -> None:
+        topic = self.config.robot_topic(ros_topic)
+        if topic is None or ros_topic in self._unbridgeable or not self.config.topics.accepts(topic) or not type_name:
             return
         try:
             check_topic(topic)
         except MrsNavError as err:  # e.g. a name with characters Zenoh keys cannot hold
-            self._unbridgeable.add(topic)
-            rospy.logwarn("zenoh bridge: not bridging %s: %s", topic, err)
+            self._unbridgeable.add(ros_topic)
+            rospy.logwarn("zenoh bridge: not bridging %s: %s", ros_topic, err)
             return
-        out = _Outbound(topic, type_name, RateLimiter(self.config.max_rate(topic)))
+        out = _Outbound(topic, ros_topic, type_name, RateLimiter(self.config.max_rate(topic)))
         msg_class = get_message_class(type_name)
         if msg_class is not None:  # serve the definition before the first message when we can
             self._definitions.setdefault(type_name, (msg_class._md5sum, msg_class._full_text))
         with self._lock:
-            self._outbound[topic] = out
+            self._outbound[ros_topic] = out
         out.subscriber = self._subscribe(out)
 
     def _subscribe(self, out: _Outbound) -> Any:
         # tcp_nodelay: without it Nagle's algorithm holds small messages (odometry) for milliseconds.
         return rospy.Subscriber(
-            out.topic, rospy.AnyMsg, self._on_ros_message, callback_args=out, queue_size=100, tcp_nodelay=True
+            out.ros_topic, rospy.AnyMsg, self._on_ros_message, callback_args=out, queue_size=100, tcp_nodelay=True
         )
 
     def _retire(self, out: _Outbound) -> None:
         """The topic has no live ROS publisher: withdraw its token and cache (it is rediscovered if one comes)."""
         with self._lock:
-            self._outbound.pop(out.topic, None)
+            self._outbound.pop(out.ros_topic, None)
             publisher, token, out.publisher, out.token = out.publisher, out.token, None, None
         out.subscriber.unregister()
         if token is None:
@@ -324,7 +330,7 @@ class ZenohBridgeNode:
 
     def _declare_outbound(self, session: zenoh.Session, out: _Outbound, header: Mapping[str, str]) -> None:
         with self._lock:
-            if out.publisher is not None or self._outbound.get(out.topic) is not out:
+            if out.publisher is not None or self._outbound.get(out.ros_topic) is not out:
                 return  # declared already, or retired while this message was on its way: announce nothing
             type_name = header.get("type", out.type)
             md5 = header.get("md5sum", "")

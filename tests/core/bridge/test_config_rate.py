@@ -56,6 +56,20 @@ def test_mapping_with_filters_rates_and_inbound() -> None:
     assert config.inbound_rule("/map") is None
 
 
+def test_a_bridge_in_a_namespace_names_its_robots_topics_as_the_robot_does() -> None:
+    config = BridgeConfig.from_mapping({"namespace": "/tb3_1/"})
+    assert config.key_prefix == "mrs_nav/tb3_1"
+    assert config.ros_topic("/odom") == "/tb3_1/odom"
+    assert config.robot_topic("/tb3_1/odom") == "/odom"
+    assert config.robot_topic("/tb3_1/move_base/status") == "/move_base/status"
+    # Another robot's topics, global ones, and a namespace that only starts alike are not this robot's.
+    assert config.robot_topic("/tb3_0/odom") is None
+    assert config.robot_topic("/clock") is None
+    assert config.robot_topic("/tb3_10/odom") is None
+    plain = BridgeConfig.from_mapping({})
+    assert (plain.ros_topic("/odom"), plain.robot_topic("/tb3_0/odom")) == ("/odom", "/tb3_0/odom")
+
+
 @pytest.mark.parametrize(
     ("params", "match"),
     [

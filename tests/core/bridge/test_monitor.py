@@ -19,7 +19,7 @@ from mrs_nav.bridge.decoder import noetic_store
 from mrs_nav.bridge.keys import topic_key, types_key
 from mrs_nav.bridge.monitor import RemoteMonitor, TopicStats
 from mrs_nav.bridge.session import open_session
-from mrs_nav.bridge.snapshot import draw_snapshot
+from mrs_nav.bridge.snapshot import RobotView, draw_snapshot
 from mrs_nav.bridge.wire import encode_attachment, encode_definition, encoding_text
 from tests.rosharness import free_port, wait_for
 
@@ -129,7 +129,7 @@ def test_monitor_discovers_decodes_and_gets_the_latched_map_late(
     text = render(summary)
     assert "4 x 3 cells" in text
     assert "/odom" in text
-    png = draw_snapshot(tmp_path / "snap.png", grid(), odom)
+    png = draw_snapshot(tmp_path / "snap.png", {"mrs_nav": RobotView(grid(), odom)})
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 

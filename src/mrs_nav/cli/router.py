@@ -1,0 +1,54 @@
+"""``mrs-nav router``: a Zenoh router that joins a fleet's bridges and monitors (no ROS, no zenohd needed).
+
+Each robot's bridge connects to it as a client (``mode: client``, ``connect: [tcp/ROUTER:7447]``) and so does
+``mrs-nav monitor --fleet``; the router forwards between them. It is the Zenoh library's own router mode, with
+multicast scouting off like every session mrs_nav opens; TLS, users and the rest come from ``--zenoh-config``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import threading
+from typing import Any
+
+from mrs_nav.errors import InvalidInputError
+
+
+def register(subparsers: Any) -> None:
+    parser: argparse.ArgumentParser = subparsers.add_parser(
+        "router",
+        help="run a Zenoh router for a fleet of bridges (no ROS needed)",
+        description="Listen on the given Zenoh endpoints and route between the robots' bridges and the monitors "
+        "connected to them, until stopped (Ctrl-C or SIGTERM).",
+    )
+    parser.add_argument(
+        "--listen",
+        action="append",
+        default=None,
+        metavar="ENDPOINT",
+        help="Zenoh endpoint to listen on (repeatable; default tcp/127.0.0.1:7447; tcp/0.0.0.0:7447 for a network)",
+    )
+    parser.add_argument(
+        "--zenoh-config", default="", metavar="JSON5", help="Zenoh configuration file (TLS certificates, users, ...)"
+    )
+    parser.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    # Imported here so that other commands do not load zenoh.
+    from mrs_nav.bridge.config import DEFAULT_LISTEN, check_endpoint, zenoh_settings  # noqa: PLC0415
+    from mrs_nav.bridge.session import open_session  # noqa: PLC0415
+
+    listen = [check_endpoint(e.strip()) for item in args.listen or DEFAULT_LISTEN for e in item.split(",") if e.strip()]
+    if not listen:
+        raise InvalidInputError("--listen: give at least one endpoint, e.g. tcp/127.0.0.1:7447")
+    session = open_session(zenoh_settings("router", listen, []), args.zenoh_config)
+    print(f"zenoh router listening on {', '.join(listen)}", flush=True)
+    try:
+        threading.Event().wait()
+    except KeyboardInterrupt:
+        print("zenoh router stopped", file=sys.stderr)
+    finally:
+        session.close()  # type: ignore[no-untyped-call]
+    return 0
