@@ -4,6 +4,7 @@ stays alive, SLAM's map keeps what it knew, and the node that dropped the messag
 
 from __future__ import annotations
 
+import contextlib
 import math
 import threading
 import time
@@ -53,13 +54,20 @@ class Stack:
             return False
 
 
-@pytest.fixture(scope="module")
-def stack(ros_master: RosMaster, rospy_node: Any) -> Iterator[Stack]:
-    rospy = rospy_node
-    from geometry_msgs.msg import PoseStamped, Twist
+@contextlib.contextmanager
+def launch_stack(
+    master: RosMaster,
+    rospy: Any,
+    launch: str,
+    args: tuple[str, ...],
+    topics: dict[str, Any],
+    *,
+    ready: Callable[[Stack], bool],
+) -> Iterator[Stack]:
+    """``launch`` running with ``args``, a publisher per entry of ``topics`` (topic -> message class) connected to
+    it, /rosout_agg and SLAM's /map heard, once ``ready(stack)``."""
     from nav_msgs.msg import OccupancyGrid
     from rosgraph_msgs.msg import Log
-    from sensor_msgs.msg import LaserScan
 
     lock = threading.Lock()
     logs: list[tuple[float, str, int, str]] = []
@@ -78,24 +86,34 @@ def stack(ros_master: RosMaster, rospy_node: Any) -> Iterator[Stack]:
         rospy.Subscriber("/rosout_agg", Log, on_log, queue_size=1000),
         rospy.Subscriber("/map", OccupancyGrid, on_map, queue_size=5),
     ]
-    publishers = {
-        "/scan": rospy.Publisher("/scan", LaserScan, queue_size=10),
-        "/move_base_simple/goal": rospy.Publisher("/move_base_simple/goal", PoseStamped, queue_size=10),
-        "/map": rospy.Publisher("/map", OccupancyGrid, queue_size=10),
-        "/cmd_vel": rospy.Publisher("/cmd_vel", Twist, queue_size=10),
-    }
+    publishers = {topic: rospy.Publisher(topic, kind, queue_size=10) for topic, kind in topics.items()}
     try:
-        with ros_master.launch("rrt_navigation.launch", *MAX_RATE, "rviz:=false", "seed:=5") as proc:
-            wait_for(lambda: proc.poll() is not None or len(maps) >= 2, 90.0, "two maps from SLAM")
+        with master.launch(launch, *args) as proc:
+            stack = Stack(rospy, master, proc, logs, maps, lock, publishers)
+            wait_for(lambda: proc.poll() is not None or ready(stack), 90.0, f"{launch} to be ready")
             assert proc.poll() is None, "roslaunch exited"
             for topic, pub in publishers.items():
                 wait_for(lambda pub=pub: pub.get_num_connections() > 0, 30.0, f"a subscriber of {topic}")
-            yield Stack(rospy, ros_master, proc, logs, maps, lock, publishers)
+            yield stack
     finally:
         for sub in subs:
             sub.unregister()
         for pub in publishers.values():
             pub.unregister()
+
+
+@pytest.fixture(scope="module")
+def stack(ros_master: RosMaster, rospy_node: Any) -> Iterator[Stack]:
+    from geometry_msgs.msg import PoseStamped, Twist
+    from nav_msgs.msg import OccupancyGrid
+    from sensor_msgs.msg import LaserScan
+
+    topics = {"/scan": LaserScan, "/move_base_simple/goal": PoseStamped, "/map": OccupancyGrid, "/cmd_vel": Twist}
+    args = (*MAX_RATE, "rviz:=false", "seed:=5")
+    with launch_stack(
+        ros_master, rospy_node, "rrt_navigation.launch", args, topics, ready=lambda s: len(s.maps) >= 2
+    ) as running:
+        yield running
 
 
 # ---- the malformed messages ------------------------------------------------------------------------------------
@@ -177,9 +195,18 @@ CASES: dict[str, Case] = {
 @pytest.mark.parametrize("case", list(CASES))
 def test_a_malformed_message_is_dropped_with_a_warning(stack: Stack, case: str) -> None:
     topic, node, make = CASES[case]
-    rospy = stack.rospy
     before = stack.known_cells()
     assert before > 0
+    inject(stack, case, topic, node, make, nodes=NODES)
+    assert stack.known_cells() >= 0.95 * before, f"{case}: known cells {before} -> {stack.known_cells()}"
+
+
+def inject(
+    stack: Stack, case: str, topic: str, node: str | None, make: Callable[[Any], Any], *, nodes: tuple[str, ...]
+) -> None:
+    """Publish the malformed message until ``node`` warns about it (or 2 s when no warning is due), give the stack
+    3 sim seconds to choke on it, then check that roslaunch and every one of ``nodes`` still run."""
+    rospy = stack.rospy
     since = time.monotonic()
     # Warnings are throttled (one per 5 s of sim time per kind), so repeat the message until one is heard.
     deadline = since + (60.0 if node else 2.0)
@@ -193,6 +220,5 @@ def test_a_malformed_message_is_dropped_with_a_warning(stack: Stack, case: str) 
     resume = rospy.get_time() + 3.0
     wait_for(lambda: rospy.get_time() > resume, 60.0, "3 s of sim time after the malformed message")
     assert stack.proc.poll() is None, "roslaunch exited"
-    for name in NODES:
+    for name in nodes:
         assert stack.alive(name), f"{name} died on {case}"
-    assert stack.known_cells() >= 0.95 * before, f"{case}: known cells {before} -> {stack.known_cells()}"

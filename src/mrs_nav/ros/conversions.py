@@ -22,6 +22,7 @@ from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D, quaternion_from_yaw, yaw_from_quaternion
 from mrs_nav.sim.commands import Twist2D
 from mrs_nav.sim.laser import Scan
+from mrs_nav.slam.scan import LaserScanData
 
 # -- time ---------------------------------------------------------------------------------------------------------
 
@@ -178,6 +179,25 @@ def laser_scan_arrays(msg: LaserScan) -> tuple[FloatArray, FloatArray]:
     ranges = np.asarray(msg.ranges, dtype=np.float64)
     angles = msg.angle_min + np.arange(ranges.size, dtype=np.float64) * msg.angle_increment
     return angles, ranges
+
+
+def scan_data(msg: LaserScan) -> LaserScanData:
+    """The core scan of a LaserScan message (InvalidInputError if its numbers are not finite, its range limits are
+    invalid or its ranges do not fit its angles)."""
+    return LaserScanData.from_message_fields(
+        angle_min=msg.angle_min,
+        angle_max=msg.angle_max,
+        angle_increment=msg.angle_increment,
+        range_min=msg.range_min,
+        range_max=msg.range_max,
+        ranges=np.asarray(msg.ranges, dtype=np.float64),
+    )
+
+
+def any_reading(ranges: FloatArray) -> bool:
+    """Whether some range is a number >= 0: NaN (an error) and negative ranges are not readings, while +inf is
+    "nothing in range" (REP 117) and a real reading. A scan without any is blind, not empty space."""
+    return bool(np.any((ranges >= 0.0) & ~np.isnan(ranges)))
 
 
 def valid_ranges(msg: LaserScan, ranges: FloatArray) -> np.ndarray:

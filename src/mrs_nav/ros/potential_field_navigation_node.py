@@ -37,9 +37,10 @@ from mrs_nav.maps.obstacles import Obstacles
 from mrs_nav.maps.world import load_world
 from mrs_nav.robot import BURGER_MAX_ANGULAR, BURGER_MAX_LINEAR, BURGER_RADIUS
 from mrs_nav.ros.conversions import (
-    laser_scan_arrays,
+    any_reading,
     pose_from_odometry,
     pose_from_transform,
+    scan_data,
     valid_ranges,
 )
 from mrs_nav.ros.navigation_conversions import latest_pose, pose_in_frame, publish_unless_shutdown
@@ -196,18 +197,24 @@ class PotentialFieldNavigationNode:
         try:
             mount = self._tf_buffer.lookup_transform(self.config.base_frame, msg.header.frame_id, rospy.Time(0))
             laser = pose.compose(pose_from_transform(mount))
-        except (tf2_ros.TransformException, MrsNavError):
-            laser = pose
-        numbers = (msg.angle_min, msg.angle_increment, msg.range_min, msg.range_max)
-        if not all(math.isfinite(v) for v in numbers):
+        except (tf2_ros.TransformException, MrsNavError) as err:
+            # Placing the beams at the wrong origin would put obstacles where there are none: drop instead.
             rospy.logwarn_throttle(
-                5.0, f"potential_field_navigation: dropping a scan with non-finite angles or range limits {numbers}"
+                5.0, f"potential_field_navigation: dropping a scan in frame {msg.header.frame_id!r}: {err}"
             )
             return
-        angles, ranges = laser_scan_arrays(msg)
-        ranges = np.where(valid_ranges(msg, ranges), ranges, np.inf)
         try:
-            obstacles = scan_obstacles(laser, angles, ranges)
+            scan = scan_data(msg)
+        except MrsNavError as err:
+            rospy.logwarn_throttle(5.0, f"potential_field_navigation: dropping scan: {err}")
+            return
+        if not any_reading(scan.ranges):
+            # A blind scan would clear every obstacle the last one saw.
+            rospy.logwarn_throttle(5.0, "potential_field_navigation: dropping a scan without a range >= 0")
+            return
+        ranges = np.where(valid_ranges(msg, scan.ranges), scan.ranges, np.inf)
+        try:
+            obstacles = scan_obstacles(laser, scan.angles, ranges)
         except MrsNavError as err:
             rospy.logwarn_throttle(5.0, f"potential_field_navigation: dropping scan: {err}")
             return

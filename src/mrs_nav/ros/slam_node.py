@@ -22,7 +22,6 @@ import threading
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
 import rospy
 import tf2_ros
 from nav_msgs.msg import MapMetaData, OccupancyGrid
@@ -31,13 +30,14 @@ from std_srvs.srv import Empty, EmptyRequest, EmptyResponse
 
 from mrs_nav.errors import MrsNavError
 from mrs_nav.geometry import Pose2D
-from mrs_nav.ros.conversions import pose_from_transform, pose_msg, transform_stamped
+from mrs_nav.ros.conversions import any_reading, pose_from_transform, pose_msg, scan_data, transform_stamped
 from mrs_nav.ros.navigation_conversions import publish_unless_shutdown
 from mrs_nav.ros.params import private_param
-from mrs_nav.slam import LaserScanData, Slam, SlamConfig
+from mrs_nav.slam import Slam, SlamConfig
 
 # Parameters of SlamConfig the node reads (gmapping's names where gmapping has them).
 _SLAM_PARAMS = tuple(f.name for f in dataclasses.fields(SlamConfig))
+_TF_ERRORS = (tf2_ros.LookupException, tf2_ros.ConnectivityException, tf2_ros.ExtrapolationException)
 _TIME_JUMP = 1.0  # s: the clock this much behind its last reading means sim time went back (a bag restarted)
 
 
@@ -64,18 +64,6 @@ class SlamNodeConfig:
             transform_publish_period=private_param("transform_publish_period", 0.05),
             tf_wait=private_param("tf_wait", 0.2),
         )
-
-
-def scan_data(msg: LaserScan) -> LaserScanData:
-    """The core scan of a LaserScan message (InvalidInputError if its ranges do not fit its angles)."""
-    return LaserScanData.from_message_fields(
-        angle_min=msg.angle_min,
-        angle_max=msg.angle_max,
-        angle_increment=msg.angle_increment,
-        range_min=msg.range_min,
-        range_max=msg.range_max,
-        ranges=np.asarray(msg.ranges, dtype=np.float64),
-    )
 
 
 class SlamNode:
@@ -110,12 +98,19 @@ class SlamNode:
         self._last_clock = now
         try:
             scan = scan_data(msg)
-            # NaN (an error) and negative ranges are not returns; +inf is "nothing in range" (REP 117) and clears.
-            if not np.any((scan.ranges >= 0.0) & ~np.isnan(scan.ranges)):
+            if not any_reading(scan.ranges):
                 rospy.logwarn_throttle(5.0, f"slam: skipping scan at {stamp:.3f}: no range is a number >= 0")
                 return
+            try:
+                mounting = self._mounting(msg.header.frame_id, msg.header.stamp)
+            except _TF_ERRORS as err:
+                # A call of its own, so that its throttle is its own: the transient "odometry not there yet" below
+                # must not hide a frame that will never work.
+                rospy.logwarn_throttle(
+                    5.0, f"slam: dropping scans in frame {msg.header.frame_id!r}: no transform to the base: {err}"
+                )
+                return
             odom = self._lookup(self.config.odom_frame, self.config.base_frame, msg.header.stamp)
-            mounting = self._mounting(msg.header.frame_id, msg.header.stamp)
             with self._lock:
                 if self._slam is None:
                     # The first usable scan's frame is the laser's; others are mapped with their own mounting.
@@ -125,10 +120,8 @@ class SlamNode:
         except MrsNavError as err:
             rospy.logwarn_throttle(5.0, f"slam: skipping scan at {stamp:.3f} (frame {msg.header.frame_id!r}): {err}")
             return
-        except (tf2_ros.LookupException, tf2_ros.ConnectivityException, tf2_ros.ExtrapolationException) as err:
-            rospy.logwarn_throttle(
-                5.0, f"slam: skipping scan at {stamp:.3f} (frame {msg.header.frame_id!r}), no transform: {err}"
-            )
+        except _TF_ERRORS as err:
+            rospy.logwarn_throttle(5.0, f"slam: skipping scan at {stamp:.3f}, no odometry at its time: {err}")
             return
         # The first processed scan publishes a map at once; later ones every map_update_interval.
         if done is not None and stamp - self._last_map_time >= self.config.slam.map_update_interval:
