@@ -29,6 +29,10 @@ MAX_BUDGET_S = 3600.0
 MAX_ITERATIONS = 10_000_000
 #: Random seeds: numpy's and ODE's seeds are unsigned 32-bit.
 MAX_SEED = 2**32 - 1
+#: Benchmark runs, seeds, repeats, bags and worker processes.
+MAX_RUNS = 10_000
+#: Benchmark durations, seconds.
+MAX_BENCH_S = 24 * 3600.0
 #: Nesting depth of a JSON obstacle list: a list of [x, y, r] lists needs 2.
 MAX_JSON_DEPTH = 2
 

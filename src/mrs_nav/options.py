@@ -10,12 +10,30 @@ import argparse
 import math
 import re
 from collections.abc import Callable
+from typing import Any, NoReturn
 
 from mrs_nav.errors import InvalidInputError
-from mrs_nav.limits import MAX_BUDGET_S, MAX_ITERATIONS, MAX_ROBOT_RADIUS_M, MAX_SEED
+from mrs_nav.limits import MAX_BENCH_S, MAX_BUDGET_S, MAX_ITERATIONS, MAX_ROBOT_RADIUS_M, MAX_RUNS, MAX_SEED, MAX_SIZE_M
 
 _INTEGER = re.compile(r"[+-]?\d+")
 _MAX_DIGITS = 30
+
+
+class Parser(argparse.ArgumentParser):
+    """An argument parser whose usage errors raise :class:`InvalidInputError`: one ``ERROR:`` line and exit 1.
+
+    argparse's own exit status 2 would collide with the documented "ran but did not reach the goal". Subparsers
+    made by ``add_subparsers`` are of the same class, so every subcommand behaves alike.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        # Let "--start -1.5,-1.5,0" through as a value: argparse takes only plain numbers like "-1.5" for negative
+        # values, and would read a comma-separated list starting with "-" as an unknown option.
+        self._negative_number_matcher = re.compile(r"^-\.?\d")
+
+    def error(self, message: str) -> NoReturn:
+        raise InvalidInputError(f"{self.prog}: {message} (see {self.prog} --help)")
 
 
 def parse_floats(text: str, count: int | tuple[int, ...], what: str) -> tuple[float, ...]:
@@ -78,3 +96,10 @@ count_option = integer_option(1, MAX_ITERATIONS)
 budget_option = number_option(1e-3, MAX_BUDGET_S)
 #: Obstacle inflation, metres.
 radius_option = number_option(0.0, MAX_ROBOT_RADIUS_M)
+#: Benchmark seeds, runs and workers: at least one, or none where ``0`` turns a part off.
+runs_option = integer_option(1, MAX_RUNS)
+optional_runs_option = integer_option(0, MAX_RUNS)
+#: Benchmark durations, seconds.
+duration_option = number_option(1e-3, MAX_BENCH_S)
+#: Lengths, metres.
+length_option = number_option(0.0, MAX_SIZE_M)

@@ -80,3 +80,11 @@ def test_map_saver_rejects_thresholds_out_of_order(ros_master: RosMaster, tmp_pa
     assert result.returncode == 1
     assert result.stderr.strip() == "ERROR: need 0 <= --free (30) < --occ (20) <= 100"
     assert not (tmp_path / "x.yaml").exists()
+
+
+def test_map_saver_option_errors_are_one_line(ros_master: RosMaster, tmp_path: Path) -> None:
+    result = _rosrun(ros_master, "map_saver", "-f", str(tmp_path / "x"), "--occ", "1e9")
+    assert result.returncode == 1
+    assert result.stderr.strip() == (
+        "ERROR: map_saver: argument --occ: expected an integer, got '1e9' (see map_saver --help)"
+    )

@@ -31,6 +31,7 @@ import numpy as np
 from mrs_nav.bridge.certs import make_ca, make_cert
 from mrs_nav.bridge.session import open_client_session
 from mrs_nav.errors import MrsNavError
+from mrs_nav.options import duration_option
 from mrs_nav.resources import CHECKOUT
 from mrs_nav.ros_processes import RosProcessError, free_port, process, roscore
 from mrs_nav.tables import markdown_table
@@ -42,7 +43,7 @@ TARGET_P50_MS, TARGET_P99_MS = 0.5, 3.0
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--duration", type=float, default=60.0, help="measured seconds (default 60)")
+    parser.add_argument("--duration", type=duration_option, default=60.0, help="measured seconds (default 60)")
 
 
 def rss_mb(pid: int) -> float:
@@ -89,8 +90,6 @@ class Receiver:
 
 
 def run(args: argparse.Namespace) -> str:
-    if args.duration <= 0:
-        raise MrsNavError(f"--duration {args.duration}: expected seconds > 0")
     with tempfile.TemporaryDirectory(prefix="mrs_nav_bench_bridge_") as tmp:
         return _measure(Path(tmp), args.duration)
 

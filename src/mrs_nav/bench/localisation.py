@@ -24,6 +24,7 @@ from mrs_nav.localisation import LocalisationConfig
 from mrs_nav.localisation.sim_drive import Kidnap, LocalisationRun, drive_and_localise
 from mrs_nav.maps.rasterize import rasterize_world
 from mrs_nav.maps.world import World, load_world
+from mrs_nav.options import runs_option
 from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.sim.scripted_drive import OFFICE_CORRIDOR_LOOP
 from mrs_nav.sim.simulator import SimulatorConfig
@@ -37,7 +38,9 @@ KIDNAP = Kidnap(20.0, Pose2D(5.0, 0.0, math.pi / 2.0))
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--seeds", type=int, default=10, help="seeds of the global localisation runs (default: 10)")
+    parser.add_argument(
+        "--seeds", type=runs_option, default=10, help="seeds of the global localisation runs (default: 10)"
+    )
 
 
 def _fmt(value: float | None) -> str:

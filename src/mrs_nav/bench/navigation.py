@@ -37,6 +37,7 @@ from mrs_nav.maps.rasterize import rasterize_world
 from mrs_nav.maps.world import Box, World, load_world
 from mrs_nav.navigation.navigator import GoalState, Navigator, NavigatorConfig, cell_centres, densify, rrt_planner
 from mrs_nav.navigation.obstacles import beam_ends
+from mrs_nav.options import budget_option, optional_runs_option, runs_option
 from mrs_nav.planning import path_length
 from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.robot import BURGER_RADIUS
@@ -63,20 +64,32 @@ SCENARIOS = {
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--seeds", type=int, default=20, help="runs per world (default 20)")
+    parser.add_argument("--seeds", type=runs_option, default=20, help="runs per world (default 20)")
     parser.add_argument("--worlds", default="arena,office", help="comma-separated: " + ", ".join(SCENARIOS))
-    parser.add_argument("--time-budget", type=float, default=0.25, help="planner budget per plan, wall s")
+    parser.add_argument("--time-budget", type=budget_option, default=0.25, help="planner budget per plan, wall s")
     parser.add_argument(
-        "--ros-runs", type=int, default=3, help="runs per world through the ROS stack in lockstep (0 = none)"
+        "--ros-runs",
+        type=optional_runs_option,
+        default=3,
+        help="runs per world through the ROS stack in lockstep (0 = none)",
     )
     parser.add_argument(
-        "--accuracy-seeds", type=int, default=5, help="seeds of the office goals with headings (0 = none)"
+        "--accuracy-seeds",
+        type=optional_runs_option,
+        default=5,
+        help="seeds of the office goals with headings (0 = none)",
     )
     parser.add_argument(
-        "--obstacle-seeds", type=int, default=10, help="seeds of the arena box put in the way (0 = none)"
+        "--obstacle-seeds",
+        type=optional_runs_option,
+        default=10,
+        help="seeds of the arena box put in the way (0 = none)",
     )
     parser.add_argument(
-        "--office-obstacle-seeds", type=int, default=3, help="seeds of the office corridor box (0 = none)"
+        "--office-obstacle-seeds",
+        type=optional_runs_option,
+        default=3,
+        help="seeds of the office corridor box (0 = none)",
     )
 
 

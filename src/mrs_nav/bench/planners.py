@@ -31,6 +31,7 @@ from mrs_nav.maps.obstacles import Obstacles
 from mrs_nav.maps.occupancy_grid import OCCUPIED, OccupancyGrid, planning_grid
 from mrs_nav.maps.rasterize import rasterize_world
 from mrs_nav.maps.world import load_world
+from mrs_nav.options import budget_option, length_option, runs_option
 from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.robot import BURGER_RADIUS
 from mrs_nav.tables import markdown_table
@@ -48,15 +49,17 @@ OFFICE_GOAL = np.array(OFFICE_GOALS[0])
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--seeds", type=int, default=50, help="seeds per planner (default 50)")
-    parser.add_argument("--budget", type=float, default=0.5, help="RRT* time budget in seconds (default 0.5)")
-    parser.add_argument("--target", type=float, default=4.44, help="length target in metres (default 4.44)")
+    parser.add_argument("--seeds", type=runs_option, default=50, help="seeds per planner (default 50)")
+    parser.add_argument("--budget", type=budget_option, default=0.5, help="RRT* time budget in seconds (default 0.5)")
+    parser.add_argument("--target", type=length_option, default=4.44, help="length target in metres (default 4.44)")
     parser.add_argument("--no-ompl", action="store_true", help="skip the OMPL comparison")
     parser.add_argument("--no-scaling", action="store_true", help="skip the map-size and iteration scaling")
     parser.add_argument("--no-building", action="store_true", help="skip the 100 m building")
-    parser.add_argument("--first-seeds", type=int, default=30, help="seeds of the first-path table (default 30)")
-    parser.add_argument("--compare-seeds", type=int, default=3, help="seeds per world against OMPL (default 3)")
-    parser.add_argument("--building-seeds", type=int, default=20, help="seeds in the building (default 20)")
+    parser.add_argument(
+        "--first-seeds", type=runs_option, default=30, help="seeds of the first-path table (default 30)"
+    )
+    parser.add_argument("--compare-seeds", type=runs_option, default=3, help="seeds per world against OMPL (default 3)")
+    parser.add_argument("--building-seeds", type=runs_option, default=20, help="seeds in the building (default 20)")
     parser.add_argument(
         "--office",
         type=Path,

@@ -28,6 +28,7 @@ from mrs_nav.fields.scenarios import (
 )
 from mrs_nav.fields.shortest_path import shortest_path
 from mrs_nav.maps.obstacles import Obstacles
+from mrs_nav.options import runs_option
 from mrs_nav.robot import BURGER_RADIUS
 from mrs_nav.tables import markdown_table
 
@@ -46,7 +47,7 @@ HEADER = [
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--seeds", type=int, default=100, help="seeds per case (default 100)")
+    parser.add_argument("--seeds", type=runs_option, default=100, help="seeds per case (default 100)")
 
 
 def _row(scenario: Scenario, method: str, settings: EscapeSettings, seeds: int, radius: float = 0.0) -> list[object]:

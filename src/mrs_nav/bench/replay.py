@@ -21,6 +21,7 @@ from tqdm import tqdm
 from mrs_nav.bag.from_carmen import carmen_to_bag
 from mrs_nav.bench.slam import DEFAULT_LOG, INTEL_CONFIG
 from mrs_nav.motion_model import DEFAULT_ALPHAS, OdometryNoise
+from mrs_nav.options import runs_option
 from mrs_nav.replay.slam_replay import SlamReplay, replay_slam
 from mrs_nav.resources import CHECKOUT
 from mrs_nav.slam.config import SlamConfig
@@ -33,7 +34,7 @@ REALTIME_TARGET = 15.0  # DESIGN.md: the Intel log processed >= 15x faster than 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--bags", type=Path, default=DEFAULT_BAGS, help=f"folder of bags (default: {DEFAULT_BAGS})")
     parser.add_argument("--log", type=Path, default=DEFAULT_LOG, help=f"Intel CARMEN log (default: {DEFAULT_LOG})")
-    parser.add_argument("--repeat", type=int, default=3, help="runs per bag; the fastest counts (default: 3)")
+    parser.add_argument("--repeat", type=runs_option, default=3, help="runs per bag; the fastest counts (default: 3)")
 
 
 def _timed(bag: Path, config: SlamConfig, repeat: int, label: str) -> SlamReplay:

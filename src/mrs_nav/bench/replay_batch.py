@@ -18,6 +18,7 @@ from pathlib import Path
 
 from mrs_nav.bench.replay import DEFAULT_BAGS
 from mrs_nav.errors import MrsNavError
+from mrs_nav.options import runs_option
 from mrs_nav.replay.batch import BagJob, find_bags, run_jobs
 from mrs_nav.replay.golden import load_golden
 from mrs_nav.replay.session_replay import PlanOptions
@@ -27,8 +28,8 @@ SPEEDUP_TARGET = 0.6  # issue: wall time with 2 workers <= 0.6x the serial time
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--bags", type=int, default=20, help="how many bags to replay (default: 20)")
-    parser.add_argument("--workers", type=int, default=2, help="local worker processes (default: 2)")
+    parser.add_argument("--bags", type=runs_option, default=20, help="how many bags to replay (default: 20)")
+    parser.add_argument("--workers", type=runs_option, default=2, help="local worker processes (default: 2)")
     parser.add_argument("--source", type=Path, default=DEFAULT_BAGS, help=f"regression bags (default: {DEFAULT_BAGS})")
 
 

@@ -23,7 +23,7 @@ from pathlib import Path
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.maps.world import load_world
-from mrs_nav.options import parse_floats
+from mrs_nav.options import duration_option, parse_floats, runs_option
 from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.ros_processes import RosProcessError, process, read_clock, roscore, roslaunch_command
 from mrs_nav.sim import Simulator, SimulatorConfig
@@ -38,9 +38,13 @@ TARGET_RTF = 50.0
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--world", type=Path, default=OFFICE, help="world file (default: the office)")
     parser.add_argument("--start", default="-5,-5,0", help="start pose x,y,yaw (default: -5,-5,0)")
-    parser.add_argument("--duration", type=float, default=120.0, help="sim seconds of the core run (default 120)")
-    parser.add_argument("--ros-seconds", type=float, default=20.0, help="wall seconds of the ROS run (default 20)")
-    parser.add_argument("--repeats", type=int, default=3, help="core runs; the best is reported (default 3)")
+    parser.add_argument(
+        "--duration", type=duration_option, default=120.0, help="sim seconds of the core run (default 120)"
+    )
+    parser.add_argument(
+        "--ros-seconds", type=duration_option, default=20.0, help="wall seconds of the ROS run (default 20)"
+    )
+    parser.add_argument("--repeats", type=runs_option, default=3, help="core runs; the best is reported (default 3)")
     parser.add_argument("--no-ros", action="store_true", help="skip the ROS run")
 
 

@@ -13,7 +13,7 @@ from mrs_nav.bag.from_carmen import carmen_to_bag
 from mrs_nav.cli.common import print_json
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.motion_model import DEFAULT_ALPHAS, OdometryNoise
-from mrs_nav.options import parse_floats
+from mrs_nav.options import parse_floats, seed_option
 
 _DEFAULT_NOISE = ",".join(f"{a:g}" for a in DEFAULT_ALPHAS)
 
@@ -40,7 +40,7 @@ def register(subparsers: Any) -> None:
         default="log",
         help="odometry: the log's ODOM lines (default) or synthetic noise on the logged poses",
     )
-    parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic odometry noise (default: 0)")
+    parser.add_argument("--seed", type=seed_option, default=0, help="seed of the synthetic odometry noise (default: 0)")
     parser.add_argument(
         "--odom-noise",
         default=_DEFAULT_NOISE,

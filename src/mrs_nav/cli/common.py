@@ -5,33 +5,15 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import re
 import sys
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import Any
 
 from mrs_nav.errors import InvalidInputError
 
 Handler = Callable[[argparse.Namespace], int]
-
-
-class Parser(argparse.ArgumentParser):
-    """An argument parser whose usage errors raise :class:`InvalidInputError`: one ``ERROR:`` line and exit 1.
-
-    argparse's own exit status 2 would collide with the documented "ran but did not reach the goal". Subparsers
-    made by ``add_subparsers`` are of the same class, so every subcommand behaves alike.
-    """
-
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
-        # Let "--start -1.5,-1.5,0" through as a value: argparse takes only plain numbers like "-1.5" for negative
-        # values, and would read a comma-separated list starting with "-" as an unknown option.
-        self._negative_number_matcher = re.compile(r"^-\.?\d")
-
-    def error(self, message: str) -> NoReturn:
-        raise InvalidInputError(f"{self.prog}: {message} (see {self.prog} --help)")
 
 
 def check_writable(path: Path, what: str, *, folder: bool = False) -> Path:

@@ -22,8 +22,9 @@ from collections.abc import Sequence
 from types import FrameType
 
 from mrs_nav import __version__
-from mrs_nav.cli.common import Parser, fail
+from mrs_nav.cli.common import fail
 from mrs_nav.errors import MrsNavError
+from mrs_nav.options import Parser
 
 SUBCOMMANDS = ("demo", "figures", "plan", "replay", "carmen2bag", "bench", "monitor", "router")
 

@@ -17,8 +17,12 @@ from typing import Any
 
 from mrs_nav.cli.common import print_json
 from mrs_nav.errors import InvalidInputError, MrsNavError
-from mrs_nav.options import parse_floats
+from mrs_nav.limits import MAX_BENCH_S
+from mrs_nav.options import number_option, parse_floats
 
+_SECONDS = number_option(0.0, MAX_BENCH_S)
+_PERIOD = number_option(0.05, 3600.0)
+_TIMEOUT = number_option(0.01, 3600.0)
 # ANSI: cursor home + clear screen, for the live redraw on a terminal.
 _CLEAR = "\x1b[H\x1b[2J"
 
@@ -57,14 +61,18 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("--once", action="store_true", help="wait for data (see --duration), print once and exit")
     parser.add_argument(
-        "--duration", type=float, default=None, metavar="S", help="run S seconds then exit (with --once: wait S s)"
+        "--duration",
+        type=number_option(0.0, MAX_BENCH_S),
+        default=None,
+        metavar="S",
+        help="run S seconds then exit (with --once: wait S s)",
     )
-    parser.add_argument("--period", type=float, default=0.5, metavar="S", help="redraw period, s (default 0.5)")
+    parser.add_argument("--period", type=_PERIOD, default=0.5, metavar="S", help="redraw period, s (default 0.5)")
     parser.add_argument("--json", action="store_true", help="print the final dashboard as one JSON object")
     parser.add_argument("--snapshot", type=Path, default=None, metavar="PNG", help="draw map, robot and path here")
     parser.add_argument("--send-goal", default=None, metavar="X,Y,YAW", help="ask the bridge to publish this goal")
     parser.add_argument("--frame", default="map", help="frame of --send-goal (default: map)")
-    parser.add_argument("--timeout", type=float, default=2.0, metavar="S", help="query timeout, s (default 2)")
+    parser.add_argument("--timeout", type=_TIMEOUT, default=2.0, metavar="S", help="query timeout, s (default 2)")
     parser.set_defaults(handler=run)
 
 
@@ -72,8 +80,6 @@ def run(args: argparse.Namespace) -> int:
     # Imported here so that zenoh, rosbags and matplotlib load only when this command runs.
     from mrs_nav.bridge.monitor import RemoteMonitor  # noqa: PLC0415
 
-    if args.duration is not None and args.duration < 0:
-        raise InvalidInputError(f"--duration {args.duration}: expected seconds >= 0")
     if args.robot is not None and not args.fleet:
         raise InvalidInputError("--robot names a robot of a fleet: add --fleet (or give its --prefix alone)")
     goal = parse_floats(args.send_goal, 3, "--send-goal") if args.send_goal else None

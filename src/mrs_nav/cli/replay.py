@@ -16,7 +16,7 @@ from tqdm import tqdm
 from mrs_nav.cli.common import check_writable, fail, print_json
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.limits import MAX_ITERATIONS, MAX_SEED
-from mrs_nav.options import count_option, seed_option
+from mrs_nav.options import count_option, number_option, runs_option, seed_option
 from mrs_nav.replay.batch import (
     BagJob,
     aggregate,
@@ -85,7 +85,7 @@ def register(subparsers: Any) -> None:
     parser.add_argument("--out", type=Path, default=Path("replay_out"), help="output folder (default: replay_out)")
     parser.add_argument(
         "--workers",
-        type=int,
+        type=runs_option,
         default=os.cpu_count() or 1,
         help="local worker processes for several bags (default: the number of CPUs; 1 replays them in turn)",
     )
@@ -105,7 +105,7 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument(
         "--relations-offset",
-        type=float,
+        type=number_option(-1e10, 1e10),
         metavar="S",
         help=(
             "relation stamp minus bag stamp (s); default: found as the most common difference, to 1 ms, between "

@@ -11,7 +11,6 @@ Regenerate the shipped course map with ``python -m mrs_nav.maps.rasterize worlds
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 from collections.abc import Sequence
@@ -23,6 +22,7 @@ from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.limits import MAX_GRID_CELLS, check_grid_cells
 from mrs_nav.maps.occupancy_grid import FREE, OCCUPIED, OccupancyGrid
 from mrs_nav.maps.world import World, load_world
+from mrs_nav.options import Parser, length_option, number_option
 
 #: The course arena map's cell size in metres.
 DEFAULT_RESOLUTION = 0.05
@@ -74,13 +74,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     """``python -m mrs_nav.maps.rasterize WORLD OUT.yaml [--resolution R] [--margin M]``: write map_server files."""
     from mrs_nav.maps.map_io import save_map  # noqa: PLC0415 - only the command needs file output
 
-    parser = argparse.ArgumentParser(prog="python -m mrs_nav.maps.rasterize", description=main.__doc__)
+    parser = Parser(prog="python -m mrs_nav.maps.rasterize", description=main.__doc__)
     parser.add_argument("world", type=Path)
     parser.add_argument("out", type=Path, help="map description to write (.yaml; the .pgm goes beside it)")
-    parser.add_argument("--resolution", type=float, default=DEFAULT_RESOLUTION, help="metres per cell")
-    parser.add_argument("--margin", type=float, default=0.0, help="free border around the obstacles, metres")
-    args = parser.parse_args(argv)
+    parser.add_argument(
+        "--resolution", type=number_option(1e-3, 10.0), default=DEFAULT_RESOLUTION, help="metres per cell"
+    )
+    parser.add_argument("--margin", type=length_option, default=0.0, help="free border around the obstacles, metres")
     try:
+        args = parser.parse_args(argv)
         save_map(rasterize_world(load_world(args.world), args.resolution, args.margin), args.out)
     except MrsNavError as err:
         print(f"ERROR: {err}", file=sys.stderr)

@@ -9,7 +9,6 @@ above ``--occ`` occupied, ``0..--free`` free, the rest unknown.
 
 from __future__ import annotations
 
-import argparse
 import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -23,6 +22,7 @@ from nav_msgs.srv import GetMap, GetMapRequest, GetMapResponse
 from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.maps.map_io import load_map, save_map
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
+from mrs_nav.options import Parser, integer_option
 from mrs_nav.ros.map_messages import occupancy_grid_msg
 from mrs_nav.ros.navigation_conversions import grid_from_msg
 from mrs_nav.ros.params import private_param
@@ -45,7 +45,7 @@ class MapServerNode:
     @classmethod
     def from_argv(cls, argv: Sequence[str]) -> MapServerNode:
         """``map_server MAP.yaml``; a bad or missing file raises MapFileError naming file and field."""
-        parser = argparse.ArgumentParser(prog="map_server", description="Serve a map_server map (.yaml + .pgm).")
+        parser = Parser(prog="map_server", description="Serve a map_server map (.yaml + .pgm).")
         parser.add_argument("map", type=Path, help="the map's .yaml description")
         args = parser.parse_args(argv)
         return cls(load_map(args.map), private_param("frame_id", "map"))
@@ -61,10 +61,14 @@ class SaverOptions:
 
     @classmethod
     def from_argv(cls, argv: Sequence[str]) -> SaverOptions:
-        parser = argparse.ArgumentParser(prog="map_saver", description="Save the map on topic 'map' to NAME.yaml/.pgm.")
+        parser = Parser(prog="map_saver", description="Save the map on topic 'map' to NAME.yaml/.pgm.")
         parser.add_argument("-f", dest="name", type=Path, default=Path("map"), help="file name without extension")
-        parser.add_argument("--occ", type=int, default=65, help="cells at or above this are occupied (0-100)")
-        parser.add_argument("--free", type=int, default=25, help="cells at or below this are free (0-100)")
+        parser.add_argument(
+            "--occ", type=integer_option(0, 100), default=65, help="cells at or above this are occupied (0-100)"
+        )
+        parser.add_argument(
+            "--free", type=integer_option(0, 100), default=25, help="cells at or below this are free (0-100)"
+        )
         args = parser.parse_args(argv)
         options = cls(args.name, args.occ, args.free)
         if not 0 <= options.free_max < options.occupied_min <= 100:

@@ -10,6 +10,7 @@ import pytest
 from mrs_nav.errors import MapFileError
 from mrs_nav.maps.map_io import load_map, save_map
 from mrs_nav.maps.occupancy_grid import OCCUPIED, UNKNOWN, OccupancyGrid
+from mrs_nav.maps.rasterize import main as rasterize_main
 from mrs_nav.maps.rasterize import rasterize_world
 from mrs_nav.maps.world import load_world
 
@@ -116,3 +117,15 @@ def test_malformed_pgm_names_the_image(tmp_path: Path, pgm: bytes, message: str)
 def test_missing_yaml_is_a_clear_error(tmp_path: Path) -> None:
     with pytest.raises(MapFileError, match=r"nope\.yaml: cannot read map description"):
         load_map(tmp_path / "nope.yaml")
+
+
+def test_rasterize_command_writes_the_map_and_refuses_bad_options_in_one_line(tmp_path, capsys) -> None:
+    world = str(REPO / "worlds" / "simple.world")
+    assert rasterize_main([world, str(tmp_path / "m.yaml")]) == 0
+    assert np.array_equal(load_map(tmp_path / "m.yaml").values, load_map(REPO / "maps" / "simple.yaml").values)
+    for bad in (["--resolution", "nan"], ["--resolution", "0"], ["--margin", "-1"], ["--nope"], []):
+        assert rasterize_main([*bad, world, str(tmp_path / "x.yaml")] if bad else []) == 1, bad
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("ERROR: python -m mrs_nav.maps.rasterize: "), err
+        assert "\n" not in err
+    assert not (tmp_path / "x.yaml").exists()
