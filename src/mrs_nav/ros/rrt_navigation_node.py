@@ -449,5 +449,10 @@ class RrtNavigationNode:
         """On shutdown: stop the loop and the robot (publishing can fail once rospy has closed the topic)."""
         if self._timer is not None:
             self._timer.shutdown()
+        # actionlib's status timer checks rospy.is_shutdown() and then publishes, a window in which the topic can
+        # close under it (a traceback at Ctrl-C). Its callback takes the server's lock and does nothing for a
+        # server not started: mark it so, under that lock, before rospy closes the topics.
+        with self._server.lock:
+            self._server.started = False
         self._planner_pool.shutdown(wait=False)
         publish_unless_shutdown(self._cmd_pub, Twist(), "rrt_navigation")
