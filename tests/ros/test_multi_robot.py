@@ -10,6 +10,8 @@ from typing import Any
 import numpy as np
 import pytest
 
+from mrs_nav.errors import InvalidInputError
+from mrs_nav.geometry import Pose2D
 from tests.ros.navharness import FOOTPRINT_RADIUS, StatusLog, TruthTrack
 from tests.rosharness import RosMaster, wait_for
 
@@ -90,3 +92,14 @@ def test_two_robots_with_crossing_goals_reach_them_without_contact(ros_master: R
             track.close()
         for log in status.values():
             log.close()
+
+
+def test_robot_poses_parameter_is_read_and_a_bad_pose_is_named() -> None:
+    from mrs_nav.ros.simulator_node import parse_poses
+
+    assert parse_poses("-5 -5 0; 5, -5, 3.14;", "~robots") == (Pose2D(-5.0, -5.0, 0.0), Pose2D(5.0, -5.0, 3.14))
+    assert parse_poses("  ", "~robots") == ()
+    with pytest.raises(InvalidInputError, match=r"~robots: pose 1 must be three finite numbers 'x y yaw', got '1 2'"):
+        parse_poses("0 0 0; 1 2", "~robots")
+    with pytest.raises(InvalidInputError, match="pose 0"):
+        parse_poses("0 nan 0", "~robots")

@@ -25,6 +25,7 @@ BENCHMARKS = {
     "bridge": "bridge",
     "soak": "soak",
     "localisation": "localisation",
+    "multi-robot": "multi_robot",
 }
 
 

@@ -1,0 +1,132 @@
+"""Several robots at once: simulator + SLAM + RRT* navigation for 3 robots in the office, max rate, lockstep.
+
+A roscore on a free port and ``roslaunch mrs_nav multi_robot.launch robots:=3 real_time_factor:=0
+lockstep:=true`` (one simulator node hosting every robot, per robot a SLAM and a navigation node, 7 processes)
+with :mod:`mrs_nav.ros.navigation_bench_peer` sending every robot its goal at once. Two robots swap ends of the
+south corridor (their straight lines cross), the third drives down the west corridor. Reported per run: the
+real-time factor from the goals to the last outcome, per robot goal reached, true distance to the goal and
+contacts (walls and other robots alike), and the CPU time all the stack's processes used per second of sim
+time (the whole run, start-up included).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+from mrs_nav.errors import InvalidInputError
+from mrs_nav.geometry import Pose2D
+from mrs_nav.resources import WORLDS_DIR
+from mrs_nav.ros_processes import RosProcessError, process, read_clock, roscore
+from mrs_nav.tables import markdown_table
+
+TARGET_RTF = 3.0  # 3 robots, whole stack, max rate in lockstep on a 2-core machine (issue 17)
+GOAL_TOLERANCE_M = 0.3  # true distance: the SLAM estimate is within 0.05 m, a corridor's SLAM error adds to it
+# name: (start, goal) in the office, world frame
+ROBOTS = {
+    "tb3_0": (Pose2D(-2.0, -5.4, 0.0), (2.0, -4.6)),
+    "tb3_1": (Pose2D(2.0, -5.4, 3.14159), (-2.0, -4.6)),
+    "tb3_2": (Pose2D(-5.0, 2.0, -1.5708), (-5.0, -2.0)),
+}
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--runs", type=int, default=1, help="runs, seeds 0.. (default 1)")
+
+
+def _group_cpu_seconds(pgid: int) -> float:
+    """User + system CPU seconds of the live processes in process group ``pgid`` (from /proc)."""
+    tick = os.sysconf("SC_CLK_TCK")
+    total = 0
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):
+            continue
+        # after "pid (comm)": state ppid pgrp ... utime (field 14 of stat) stime (15)
+        if int(fields[2]) == pgid:
+            total += int(fields[11]) + int(fields[12])
+    return total / tick
+
+
+def run_once(seed: int) -> dict[str, Any]:
+    """One run; the peer's JSON plus ``cpu_s`` and ``total_sim_s`` of the whole launch."""
+    poses = [f"pose{i}:={s.x} {s.y} {s.yaw}" for i, (s, _) in enumerate(ROBOTS.values())]
+    with tempfile.TemporaryDirectory(prefix="mrs_nav_bench_") as tmp:
+        log_dir = Path(tmp)
+        with roscore(log_dir) as env:
+            launch = ["roslaunch", "--wait", "mrs_nav", "multi_robot.launch", f"robots:={len(ROBOTS)}", *poses]
+            launch += [f"world:={(WORLDS_DIR / 'office.world').resolve()}", "real_time_factor:=0"]
+            launch += ["lockstep:=true", "rviz:=false", f"seed:={seed}", f"planner_seed:={seed}"]
+            out = log_dir / "result.json"
+            peer = [sys.executable, "-m", "mrs_nav.ros.navigation_bench_peer", "--out", str(out)]
+            for name, (_, goal) in ROBOTS.items():
+                peer += ["--robot", name, str(goal[0]), str(goal[1])]
+            with process(launch, env, log_dir / "launch.log") as proc:
+                read_clock(env, timeout=60.0)  # the launch is up and /use_sim_time set before the peer starts
+                done = subprocess.run(peer, env=env, capture_output=True, text=True, timeout=900, check=False)
+                if done.returncode != 0 or not out.is_file():
+                    log = (log_dir / "launch.log").read_text()[-500:]
+                    raise RosProcessError(f"multi-robot bench peer failed: {done.stderr.strip()[-300:]} {log}")
+                if proc.poll() is not None:
+                    raise RosProcessError(f"roslaunch exited early: {(log_dir / 'launch.log').read_text()[-500:]}")
+                cpu = _group_cpu_seconds(proc.pid)
+                total_sim, _ = read_clock(env)
+            result: dict[str, Any] = json.loads(out.read_text())
+    return {**result, "cpu_s": cpu, "total_sim_s": total_sim}
+
+
+def run(args: argparse.Namespace) -> str:
+    if args.runs < 1:
+        raise InvalidInputError(f"--runs must be >= 1, got {args.runs}")
+    load = os.getloadavg()
+    rows, factors, all_ok = [], [], True
+    for seed in range(args.runs):
+        r = run_once(seed)
+        rtf = r["sim_s"] / r["wall_s"]
+        factors.append(rtf)
+        for name, robot in r["robots"].items():
+            ok = robot["reached"] and robot["final_error_m"] <= GOAL_TOLERANCE_M and robot["contacts"] == 0
+            all_ok = all_ok and ok
+            rows.append(
+                [
+                    seed,
+                    name,
+                    "reached" if robot["reached"] else "FAILED",
+                    robot["final_error_m"],
+                    int(robot["contacts"]),
+                    robot["sim_s"],
+                    rtf,
+                    r["cpu_s"] / r["total_sim_s"],
+                ]
+            )
+    verdict = "meets" if min(factors) >= TARGET_RTF else "MISSES"
+    header = [
+        "seed",
+        "robot",
+        "goal",
+        "true error (m)",
+        "contacts",
+        "time to goal (sim s)",
+        "real-time factor",
+        "stack CPU s per sim s",
+    ]
+    starts = ", ".join(f"{n} ({s.x:g}, {s.y:g}) -> ({g[0]:g}, {g[1]:g})" for n, (s, g) in ROBOTS.items())
+    return (
+        f"{len(ROBOTS)} robots in `office.world` (`multi_robot.launch robots:={len(ROBOTS)} real_time_factor:=0 "
+        "lockstep:=true`: one simulator node, per robot SLAM and RRT* navigation, own roscore on a free port), "
+        f"every goal sent at once: {starts}. Real-time factor from the goals to the last outcome (wall clock, "
+        f"while other jobs shared the machine: load average {load[0]:.1f} / {load[1]:.1f} / {load[2]:.1f} "
+        f"(1/5/15 min) on {os.cpu_count()} cores at the start); CPU s of all the stack's processes per sim s over "
+        f"the whole run. Target >= {TARGET_RTF:.0f}x real time: **{verdict}**; every goal reached within "
+        f"{GOAL_TOLERANCE_M} m (true pose) without contact: **{'yes' if all_ok else 'NO'}**.\n\n"
+        + markdown_table(header, rows)
+    )
