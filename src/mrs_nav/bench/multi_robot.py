@@ -12,18 +12,16 @@ time (the whole run, start-up included).
 from __future__ import annotations
 
 import argparse
-import json
 import os
-import subprocess
-import sys
 import tempfile
 from pathlib import Path
 from typing import Any
 
+from mrs_nav.bench.navigation import run_peer
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.resources import WORLDS_DIR
-from mrs_nav.ros_processes import RosProcessError, process, read_clock, roscore
+from mrs_nav.ros_processes import TAG_VARIABLE, process, read_clock, roscore, tagged_pids
 from mrs_nav.tables import markdown_table
 
 TARGET_RTF = 3.0  # 3 robots, whole stack, max rate in lockstep on a 2-core machine (issue 17)
@@ -40,21 +38,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--runs", type=int, default=1, help="runs, seeds 0.. (default 1)")
 
 
-def _group_cpu_seconds(pgid: int) -> float:
-    """User + system CPU seconds of the live processes in process group ``pgid`` (from /proc)."""
-    tick = os.sysconf("SC_CLK_TCK")
-    total = 0
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
+def _stack_cpu_seconds(launch_pid: int) -> float:
+    """User + system CPU seconds so far of the launch and every node it started (roslaunch puts its nodes in
+    sessions of their own, so they are found by the tag :func:`mrs_nav.ros_processes.process` gave them)."""
+    environ = Path(f"/proc/{launch_pid}/environ").read_bytes().split(b"\0")
+    tag = next(v.split(b"=", 1)[1].decode() for v in environ if v.startswith(f"{TAG_VARIABLE}=".encode()))
+    ticks = 0
+    for pid in tagged_pids(tag):
         try:
-            fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+            fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
         except (OSError, IndexError):
-            continue
-        # after "pid (comm)": state ppid pgrp ... utime (field 14 of stat) stime (15)
-        if int(fields[2]) == pgid:
-            total += int(fields[11]) + int(fields[12])
-    return total / tick
+            continue  # ended meanwhile
+        ticks += int(fields[11]) + int(fields[12])  # utime, stime: fields 14 and 15 of stat
+    return ticks / os.sysconf("SC_CLK_TCK")
 
 
 def run_once(seed: int) -> dict[str, Any]:
@@ -66,21 +62,11 @@ def run_once(seed: int) -> dict[str, Any]:
             launch = ["roslaunch", "--wait", "mrs_nav", "multi_robot.launch", f"robots:={len(ROBOTS)}", *poses]
             launch += [f"world:={(WORLDS_DIR / 'office.world').resolve()}", "real_time_factor:=0"]
             launch += ["lockstep:=true", "rviz:=false", f"seed:={seed}", f"planner_seed:={seed}"]
-            out = log_dir / "result.json"
-            peer = [sys.executable, "-m", "mrs_nav.ros.navigation_bench_peer", "--out", str(out)]
-            for name, (_, goal) in ROBOTS.items():
-                peer += ["--robot", name, str(goal[0]), str(goal[1])]
+            peer = [arg for name, (_, goal) in ROBOTS.items() for arg in ("--robot", name, *map(str, goal))]
             with process(launch, env, log_dir / "launch.log") as proc:
-                read_clock(env, timeout=60.0)  # the launch is up and /use_sim_time set before the peer starts
-                done = subprocess.run(peer, env=env, capture_output=True, text=True, timeout=900, check=False)
-                if done.returncode != 0 or not out.is_file():
-                    log = (log_dir / "launch.log").read_text()[-500:]
-                    raise RosProcessError(f"multi-robot bench peer failed: {done.stderr.strip()[-300:]} {log}")
-                if proc.poll() is not None:
-                    raise RosProcessError(f"roslaunch exited early: {(log_dir / 'launch.log').read_text()[-500:]}")
-                cpu = _group_cpu_seconds(proc.pid)
+                result: dict[str, Any] = run_peer(proc, env, log_dir, peer)
+                cpu = _stack_cpu_seconds(proc.pid)
                 total_sim, _ = read_clock(env)
-            result: dict[str, Any] = json.loads(out.read_text())
     return {**result, "cpu_s": cpu, "total_sim_s": total_sim}
 
 
