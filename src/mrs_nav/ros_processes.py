@@ -60,10 +60,10 @@ def ros_env(uri: str, log_dir: Path) -> dict[str, str]:
 TAG_VARIABLE = "MRS_NAV_PROCESS_TAG"
 
 
-def kill_tagged(tag: str) -> list[int]:
-    """SIGKILL every process whose environment holds ``TAG_VARIABLE=tag``; returns their pids."""
+def tagged_pids(tag: str) -> list[int]:
+    """The live processes whose environment holds ``TAG_VARIABLE=tag``."""
     needle = f"{TAG_VARIABLE}={tag}".encode()
-    killed = []
+    pids = []
     for entry in Path("/proc").iterdir():
         if not entry.name.isdigit():
             continue
@@ -72,9 +72,17 @@ def kill_tagged(tag: str) -> list[int]:
         except OSError:
             continue
         if needle in environ.split(b"\0"):
-            with contextlib.suppress(ProcessLookupError):
-                os.kill(int(entry.name), signal.SIGKILL)
-                killed.append(int(entry.name))
+            pids.append(int(entry.name))
+    return pids
+
+
+def kill_tagged(tag: str) -> list[int]:
+    """SIGKILL every process whose environment holds ``TAG_VARIABLE=tag``; returns their pids."""
+    killed = []
+    for pid in tagged_pids(tag):
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(pid, signal.SIGKILL)
+            killed.append(pid)
     return killed
 
 

@@ -21,7 +21,8 @@ class TruthTrack:
     """Ground-truth positions (``/ground_truth/odom``) with their sim times, the simulator's contact count
     (``/ground_truth/contacts``) and the clearance to the world."""
 
-    def __init__(self, rospy: Any, world: str) -> None:
+    def __init__(self, rospy: Any, world: str, namespace: str = "") -> None:
+        """``namespace``: a robot of several (``tb3_0``), whose topics are under ``/tb3_0/``."""
         from nav_msgs.msg import Odometry
         from std_msgs.msg import UInt32
 
@@ -30,8 +31,13 @@ class TruthTrack:
         self.samples: list[tuple[float, float, float]] = []
         self.yaws: list[float] = []
         self.contacts = 0
-        self.sub = rospy.Subscriber("/ground_truth/odom", Odometry, self._on_msg, queue_size=1000, tcp_nodelay=True)
-        self.contacts_sub = rospy.Subscriber("/ground_truth/contacts", UInt32, self._on_contacts, queue_size=10)
+        prefix = f"/{namespace}" if namespace else ""
+        self.sub = rospy.Subscriber(
+            f"{prefix}/ground_truth/odom", Odometry, self._on_msg, queue_size=1000, tcp_nodelay=True
+        )
+        self.contacts_sub = rospy.Subscriber(
+            f"{prefix}/ground_truth/contacts", UInt32, self._on_contacts, queue_size=10
+        )
 
     def _on_contacts(self, msg: Any) -> None:
         self.contacts = int(msg.data)

@@ -24,6 +24,7 @@ import sys
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -93,6 +94,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def run_peer(proc: subprocess.Popen[bytes], env: dict[str, str], log_dir: Path, peer_args: list[str]) -> Any:
+    """Once the launch ``proc`` (logging to ``log_dir/launch.log``) has its clock running, run
+    :mod:`mrs_nav.ros.navigation_bench_peer` with ``peer_args`` against it; the peer's JSON result."""
+    out = log_dir / "result.json"
+    read_clock(env, timeout=60.0)  # the launch is up and /use_sim_time set before the peer starts
+    peer = [sys.executable, "-m", "mrs_nav.ros.navigation_bench_peer", "--out", str(out), *peer_args]
+    done = subprocess.run(peer, env=env, capture_output=True, text=True, timeout=900, check=False)
+    if done.returncode != 0 or not out.is_file():
+        log = (log_dir / "launch.log").read_text()[-500:]
+        raise RosProcessError(f"navigation bench peer failed: {done.stderr.strip()[-300:]} {log}")
+    if proc.poll() is not None:
+        raise RosProcessError(f"roslaunch exited early: {(log_dir / 'launch.log').read_text()[-500:]}")
+    return json.loads(out.read_text())
+
+
 def ros_run(scenario: Scenario, seed: int) -> dict[str, float]:
     """One goal through ``rrt_navigation.launch`` at max rate in lockstep; the peer's JSON result."""
     with tempfile.TemporaryDirectory(prefix="mrs_nav_bench_") as tmp:
@@ -107,18 +123,8 @@ def ros_run(scenario: Scenario, seed: int) -> dict[str, float]:
                 "rviz:=false",
                 f"seed:={seed}",
             )
-            out = log_dir / "result.json"
-            peer = [sys.executable, "-m", "mrs_nav.ros.navigation_bench_peer", "--out", str(out), "--goal"]
-            peer += [str(v) for v in scenario.goal]
             with process(launch, env, log_dir / "launch.log") as proc:
-                read_clock(env, timeout=60.0)  # the launch is up and /use_sim_time set before the peer starts
-                done = subprocess.run(peer, env=env, capture_output=True, text=True, timeout=600, check=False)
-                if done.returncode != 0 or not out.is_file():
-                    log = (log_dir / "launch.log").read_text()[-500:]
-                    raise RosProcessError(f"navigation bench peer failed: {done.stderr.strip()[-300:]} {log}")
-                if proc.poll() is not None:
-                    raise RosProcessError(f"roslaunch exited early: {(log_dir / 'launch.log').read_text()[-500:]}")
-            result: dict[str, float] = json.loads(out.read_text())
+                result: dict[str, float] = run_peer(proc, env, log_dir, ["--goal", *map(str, scenario.goal)])
     return result
 
 

@@ -26,6 +26,7 @@ BENCHMARKS = {
     "fleet": "fleet",
     "soak": "soak",
     "localisation": "localisation",
+    "multi-robot": "multi_robot",
 }
 
 

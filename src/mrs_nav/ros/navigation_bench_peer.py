@@ -1,10 +1,15 @@
-"""The ROS side of the ROS part of ``mrs-nav bench navigation``: one goal through the running ROS stack.
+"""The ROS side of the ROS parts of ``mrs-nav bench navigation`` and ``bench multi-robot``: goals through the
+running ROS stack.
 
 Run as ``python -m mrs_nav.ros.navigation_bench_peer --goal X Y --out FILE`` against a master on which
 ``rrt_navigation.launch`` runs. It waits for the first map and the navigation node, lets 3 s of sim time pass
 (so the node has the map too), sends the goal on ``/move_base_simple/goal`` and waits for ``reached`` or
 ``failed`` on ``/rrt_navigation/status``. Writes JSON: ``reached``, ``sim_s`` and ``wall_s`` from the goal to
 the outcome, ``final_error_m`` (true pose from ``/ground_truth/odom`` to the goal) and ``contacts``.
+
+With ``--robot NS X Y`` (repeated, instead of ``--goal``; ``multi_robot.launch``) the same for every robot at
+once under its namespace (``/NS/map``, ``/NS/move_base_simple/goal``, ...): all goals go out together and the
+JSON holds ``robots`` (NS -> the fields above) and ``sim_s``/``wall_s`` from the goals to the last outcome.
 """
 
 from __future__ import annotations
@@ -30,57 +35,101 @@ def _wait(pred: Any, timeout: float, what: str) -> None:
         time.sleep(0.01)
 
 
+class _Robot:
+    """One robot's map, status, ground truth and contacts; ``prefix`` is ``""`` or ``"/NS"``."""
+
+    def __init__(self, prefix: str, goal: tuple[float, float]) -> None:
+        self.goal = goal
+        self.lock = threading.Lock()
+        self.has_map = False
+        self.outcome: tuple[str, float, float] | None = None
+        self.truth: tuple[float, float] | None = None
+        self.contacts = 0
+        self.subs = [
+            rospy.Subscriber(f"{prefix}/map", OccupancyGrid, self._on_map, queue_size=1),
+            rospy.Subscriber(f"{prefix}/rrt_navigation/status", String, self._on_status, queue_size=100),
+            rospy.Subscriber(f"{prefix}/ground_truth/odom", Odometry, self._on_truth, queue_size=1),
+            rospy.Subscriber(f"{prefix}/ground_truth/contacts", UInt32, self._on_contacts, queue_size=10),
+        ]
+        self.goal_pub = rospy.Publisher(f"{prefix}/move_base_simple/goal", PoseStamped, queue_size=1, latch=True)
+
+    def _on_map(self, _msg: OccupancyGrid) -> None:
+        self.has_map = True
+
+    def _on_status(self, msg: String) -> None:
+        for word in ("reached", "failed"):
+            if msg.data.startswith(f"{word}:") and self.outcome is None:
+                with self.lock:
+                    self.outcome = (word, rospy.get_time(), time.monotonic())
+
+    def _on_truth(self, msg: Odometry) -> None:
+        with self.lock:
+            self.truth = (msg.pose.pose.position.x, msg.pose.pose.position.y)
+
+    def _on_contacts(self, msg: UInt32) -> None:
+        self.contacts = int(msg.data)
+
+    def ready(self) -> bool:
+        return self.has_map and self.goal_pub.get_num_connections() > 0
+
+    def send_goal(self) -> None:
+        goal = PoseStamped()
+        goal.header.frame_id = "map"
+        goal.pose.position.x, goal.pose.position.y = self.goal
+        goal.pose.orientation.w = 1.0
+        self.goal_pub.publish(goal)
+
+    def result(self, sim0: float, wall0: float) -> dict[str, Any]:
+        with self.lock:
+            assert self.outcome is not None
+            word, sim1, wall1 = self.outcome
+            x, y = self.truth or (math.nan, math.nan)
+        return {
+            "reached": word == "reached",
+            "sim_s": sim1 - sim0,
+            "wall_s": wall1 - wall0,
+            "final_error_m": math.hypot(x - self.goal[0], y - self.goal[1]),
+            "contacts": self.contacts,
+        }
+
+    def close(self) -> None:
+        for sub in self.subs:
+            sub.unregister()
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--goal", type=float, nargs=2, required=True)
+    where = parser.add_mutually_exclusive_group(required=True)
+    where.add_argument("--goal", type=float, nargs=2)
+    where.add_argument("--robot", nargs=3, action="append", metavar=("NS", "X", "Y"), help="repeat per robot")
     parser.add_argument("--out", required=True)
     parser.add_argument("--timeout", type=float, default=300.0, help="wall s for the goal")
     args = parser.parse_args(rospy.myargv()[1:])
     rospy.init_node("navigation_bench_peer", disable_signals=True)
-    lock = threading.Lock()
-    state: dict[str, Any] = {"map": False, "outcome": None, "truth": None, "contacts": 0}
-
-    def on_status(msg: String) -> None:
-        for word in ("reached", "failed"):
-            if msg.data.startswith(f"{word}:") and state["outcome"] is None:
-                with lock:
-                    state["outcome"] = (word, rospy.get_time(), time.monotonic())
-
-    def on_truth(msg: Odometry) -> None:
-        with lock:
-            state["truth"] = (msg.pose.pose.position.x, msg.pose.pose.position.y)
-
-    subs = [
-        rospy.Subscriber("/map", OccupancyGrid, lambda _m: state.update(map=True), queue_size=1),
-        rospy.Subscriber("/rrt_navigation/status", String, on_status, queue_size=100),
-        rospy.Subscriber("/ground_truth/odom", Odometry, on_truth, queue_size=1),
-        rospy.Subscriber("/ground_truth/contacts", UInt32, lambda m: state.update(contacts=int(m.data)), queue_size=10),
-    ]
-    goal_pub = rospy.Publisher("/move_base_simple/goal", PoseStamped, queue_size=1, latch=True)
-    _wait(lambda: state["map"] and goal_pub.get_num_connections() > 0, 120.0, "map and navigation node")
+    if args.goal is not None:
+        robots = {"": _Robot("", (args.goal[0], args.goal[1]))}
+    else:
+        robots = {ns: _Robot(f"/{ns}", (float(x), float(y))) for ns, x, y in args.robot}
+    _wait(lambda: all(r.ready() for r in robots.values()), 120.0, "map and navigation node")
     first_map = rospy.get_time()
     _wait(lambda: rospy.get_time() > first_map + 3.0, 60.0, "3 s of sim time")
-    goal = PoseStamped()
-    goal.header.frame_id = "map"
-    goal.pose.position.x, goal.pose.position.y = args.goal
-    goal.pose.orientation.w = 1.0
     sim0, wall0 = rospy.get_time(), time.monotonic()
-    goal_pub.publish(goal)
-    _wait(lambda: state["outcome"] is not None, args.timeout, "outcome")
-    with lock:
-        word, sim1, wall1 = state["outcome"]
-        x, y = state["truth"] or (math.nan, math.nan)
-    result = {
-        "reached": word == "reached",
-        "sim_s": sim1 - sim0,
-        "wall_s": wall1 - wall0,
-        "final_error_m": math.hypot(x - args.goal[0], y - args.goal[1]),
-        "contacts": state["contacts"],
-    }
+    for robot in robots.values():
+        robot.send_goal()
+    _wait(lambda: all(r.outcome is not None for r in robots.values()), args.timeout, "outcome")
+    results = {ns: robot.result(sim0, wall0) for ns, robot in robots.items()}
+    if args.goal is not None:
+        summary: dict[str, Any] = results[""]
+    else:
+        summary = {
+            "robots": results,
+            "sim_s": max(r["sim_s"] for r in results.values()),
+            "wall_s": max(r["wall_s"] for r in results.values()),
+        }
     with open(args.out, "w", encoding="utf-8") as out:
-        json.dump(result, out)
-    for sub in subs:
-        sub.unregister()
+        json.dump(summary, out)
+    for robot in robots.values():
+        robot.close()
     rospy.signal_shutdown("done")
 
 

@@ -1,4 +1,4 @@
-"""SimulatorNode: the ODE simulator (:class:`mrs_nav.sim.Simulator`) as a ROS 1 node in place of Gazebo.
+"""SimulatorNode: the ODE simulator (:class:`mrs_nav.sim.MultiRobotSimulator`) as a ROS 1 node in place of Gazebo.
 
 Subscribes ``cmd_vel`` (geometry_msgs/Twist). Publishes ``clock`` (it *is* the clock: run with
 ``/use_sim_time`` true), ``odom`` (nav_msgs/Odometry) and tf ``odom -> base_footprint``, ``scan``
@@ -19,6 +19,13 @@ its name) puts a box into the world at run time, e.g. across a corridor after th
 
 ``~set_pose`` (geometry_msgs/Pose2D, world frame) teleports the robot, stopped, without its odometry noticing:
 the kidnapped-robot test of a localisation. A pose inside an obstacle is logged and ignored.
+
+Several robots: ``~robots`` ("x y yaw; x y yaw; ...", world frame; empty = the one robot at ``~x ~y ~yaw``)
+puts robot ``i`` as ``tb3_i`` into the same ODE world. Each has its own topics under ``tb3_i/`` (``cmd_vel``,
+``odom``, ``scan``, ``ground_truth/odom``, ``ground_truth/contacts``, ``joint_states``; ``~tb3_i/set_pose``)
+and frames prefixed ``tb3_i/`` (``tb3_i/odom -> tb3_i/base_footprint``, scans in ``tb3_i/base_scan``); they
+share ``/clock`` and the ground-truth frame. Each sees the others in its scan, contacts between robots count
+like wall contacts, and in lockstep the simulation waits for every robot's controller.
 """
 
 from __future__ import annotations
@@ -57,8 +64,15 @@ from mrs_nav.ros.conversions import (
     twist_from_msg,
 )
 from mrs_nav.ros.params import private_param
-from mrs_nav.sim import LaserParams, LockstepConfig, LockstepGate, Simulator, SimulatorConfig, Twist2D
-from mrs_nav.sim.laser import Scan
+from mrs_nav.sim import (
+    LaserParams,
+    LockstepConfig,
+    LockstepGate,
+    MultiRobotSimulator,
+    SimulatedRobot,
+    SimulatorConfig,
+    Twist2D,
+)
 
 WHEEL_JOINTS = ("wheel_left_joint", "wheel_right_joint")
 # When pacing falls this far behind (s of wall time), the lag is forgiven rather than caught up in a burst.
@@ -92,6 +106,7 @@ class SimulatorNodeConfig:
     ground_truth_frame: str = "world"
     publish_tf: bool = True
     lockstep: LockstepConfig | None = None
+    robots: tuple[Pose2D, ...] = ()  # empty: one robot at ``start`` with unprefixed topics and frames
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.real_time_factor) and self.real_time_factor >= 0.0):
@@ -139,7 +154,27 @@ class SimulatorNodeConfig:
             )
             if private_param("lockstep", False)
             else None,
+            robots=parse_poses(private_param("robots", ""), "~robots"),
         )
+
+    def robot_names(self) -> list[str]:
+        """Each robot's namespace and frame prefix: ``tb3_0``, ``tb3_1``, ...; one unprefixed robot by default."""
+        return [f"tb3_{i}" for i in range(len(self.robots))] if self.robots else [""]
+
+
+def parse_poses(text: str, name: str) -> tuple[Pose2D, ...]:
+    """Poses written ``"x y yaw; x y yaw"`` (m, m, rad; commas also separate numbers); empty text gives none."""
+    poses = []
+    for i, item in enumerate(part for part in text.split(";") if part.strip()):
+        fields = item.replace(",", " ").split()
+        try:
+            numbers = [float(v) for v in fields]
+        except ValueError:
+            numbers = []
+        if len(numbers) != 3 or not all(math.isfinite(v) for v in numbers):
+            raise InvalidInputError(f"{name}: pose {i} must be three finite numbers 'x y yaw', got {item.strip()!r}")
+        poses.append(Pose2D(*numbers))
+    return tuple(poses)
 
 
 def _own_the_clock() -> Any:
@@ -170,43 +205,72 @@ def resolve_world(name: str) -> Path:
         return Path(name)
 
 
+class _RobotPorts:
+    """One simulated robot's topics, frames and lockstep gate; ``prefix`` is ``""`` or ``"tb3_i/"``."""
+
+    def __init__(self, node: SimulatorNode, robot: SimulatedRobot, prefix: str) -> None:
+        cfg = node.config
+        self.robot = robot
+        self._node = node
+        self.odom_frame = prefix + cfg.odom_frame
+        self.base_frame = prefix + cfg.base_frame
+        self.scan_frame = prefix + cfg.scan_frame
+        self.who = f"simulator: {prefix[:-1]}: " if prefix else "simulator: "
+        self.odom_pub = rospy.Publisher(prefix + "odom", OdometryMsg, queue_size=10)
+        self.truth_pub = rospy.Publisher(prefix + "ground_truth/odom", OdometryMsg, queue_size=10)
+        self.contacts_pub = rospy.Publisher(prefix + "ground_truth/contacts", UInt32, queue_size=1, latch=True)
+        self.contact_events = -1
+        self.scan_pub = rospy.Publisher(prefix + "scan", LaserScan, queue_size=5)
+        self.joints_pub = rospy.Publisher(prefix + "joint_states", JointState, queue_size=10)
+        self.gate = LockstepGate(cfg.lockstep) if cfg.lockstep is not None else None
+        self.cmd_sub = rospy.Subscriber(prefix + "cmd_vel", Twist, self._on_cmd_vel, queue_size=10, tcp_nodelay=True)
+        self.set_pose_sub = rospy.Subscriber(f"~{prefix}set_pose", Pose2DMsg, self._on_set_pose, queue_size=1)
+
+    def _on_cmd_vel(self, msg: Twist) -> None:
+        try:
+            twist = twist_from_msg(msg)
+        except InvalidInputError as err:
+            rospy.logwarn_throttle(5.0, f"{self.who}ignoring cmd_vel: {err}")
+            return
+        with self._node.lock:
+            self.robot.set_command(twist.v, twist.omega)
+            now = self._node.fleet.time
+        if self.gate is not None:
+            self.gate.on_command(now)
+
+    def _on_set_pose(self, msg: Pose2DMsg) -> None:
+        try:
+            pose = Pose2D(msg.x, msg.y, msg.theta)
+            with self._node.lock:
+                self.robot.teleport(pose)
+        except InvalidInputError as err:
+            rospy.logwarn_throttle(5.0, f"{self.who}ignoring set_pose: {err}")
+            return
+        rospy.loginfo(f"{self.who}robot teleported to ({pose.x:.2f}, {pose.y:.2f}, {pose.yaw:.2f})")
+
+
 class SimulatorNode:
-    """Wires a :class:`Simulator` to ROS topics; :meth:`spin` runs the stepping loop until shutdown."""
+    """Wires a :class:`MultiRobotSimulator` to ROS topics; :meth:`spin` runs the stepping loop until shutdown."""
 
     def __init__(self, config: SimulatorNodeConfig) -> None:
         self.config = config
-        self.sim = Simulator(load_world(config.world), config.sim, config.start)
-        self._lock = threading.Lock()
+        names = config.robot_names()
+        starts = config.robots or (config.start,)
+        self.fleet = MultiRobotSimulator(load_world(config.world), config.sim, starts, names)
+        self.lock = threading.Lock()
         self._odom_every = _rate_divisor(config.sim.physics_rate, config.odom_rate, "odom_rate")
         self._clock_every = _rate_divisor(config.sim.physics_rate, config.clock_rate, "clock_rate")
         self._joints_every = _rate_divisor(config.sim.physics_rate, config.joint_states_rate, "joint_states_rate")
         # no Nagle on the lockstep round trip (clock out, command back): the last small message before a pause
         # must not wait for the peer's delayed ACK
         self._clock_pub = rospy.Publisher("clock", Clock, queue_size=10, tcp_nodelay=True)
-        self._odom_pub = rospy.Publisher("odom", OdometryMsg, queue_size=10)
-        self._truth_pub = rospy.Publisher("ground_truth/odom", OdometryMsg, queue_size=10)
-        self._contacts_pub = rospy.Publisher("ground_truth/contacts", UInt32, queue_size=1, latch=True)
-        self._contact_events = -1
-        self._scan_pub = rospy.Publisher("scan", LaserScan, queue_size=5)
-        self._joints_pub = rospy.Publisher("joint_states", JointState, queue_size=10)
         self._tf = tf2_ros.TransformBroadcaster() if config.publish_tf else None
-        self._cmd_sub = rospy.Subscriber("cmd_vel", Twist, self._on_cmd_vel, queue_size=10, tcp_nodelay=True)
+        self._robots = [
+            _RobotPorts(self, robot, f"{name}/" if name else "")
+            for robot, name in zip(self.fleet.robots, names, strict=True)
+        ]
         self._box_sub = rospy.Subscriber("~add_box", Marker, self._on_add_box, queue_size=10)
-        self._set_pose_sub = rospy.Subscriber("~set_pose", Pose2DMsg, self._on_set_pose, queue_size=1)
         self._set_own_time = _own_the_clock()
-        self._gate = LockstepGate(config.lockstep) if config.lockstep is not None else None
-
-    def _on_cmd_vel(self, msg: Twist) -> None:
-        try:
-            twist = twist_from_msg(msg)
-        except InvalidInputError as err:
-            rospy.logwarn_throttle(5.0, f"simulator: ignoring cmd_vel: {err}")
-            return
-        with self._lock:
-            self.sim.set_command(twist.v, twist.omega)
-            now = self.sim.time
-        if self._gate is not None:
-            self._gate.on_command(now)
 
     def _on_add_box(self, msg: Marker) -> None:
         """Add a box obstacle at run time: a CUBE marker's pose (world frame) and scale (full sizes, m)."""
@@ -225,60 +289,56 @@ class SimulatorNode:
             msg.scale.z,
         )
         try:
-            with self._lock:
-                self.sim.add_box(box)
+            with self.lock:
+                self.fleet.add_box(box)
         except InvalidInputError as err:
             rospy.logwarn_throttle(5.0, f"simulator: ~add_box: {err}")
             return
         rospy.loginfo(f"simulator: added box {box.name!r} at ({box.x:.2f}, {box.y:.2f})")
 
-    def _on_set_pose(self, msg: Pose2DMsg) -> None:
-        try:
-            pose = Pose2D(msg.x, msg.y, msg.theta)
-            with self._lock:
-                self.sim.teleport(pose)
-        except InvalidInputError as err:
-            rospy.logwarn_throttle(5.0, f"simulator: ignoring set_pose: {err}")
-            return
-        rospy.loginfo(f"simulator: robot teleported to ({pose.x:.2f}, {pose.y:.2f}, {pose.yaw:.2f})")
-
     def _publish_state(self) -> None:
         cfg = self.config
-        with self._lock:
-            now = self.sim.time
-            odom = self.sim.odometry()
-            truth, truth_twist = self.sim.ground_truth(), self.sim.ground_truth_twist()
-        self._odom_pub.publish(
-            odometry_msg(
-                odom.pose, Twist2D(odom.v, odom.omega), now, frame_id=cfg.odom_frame, child_frame_id=cfg.base_frame
+        with self.lock:
+            now = self.fleet.time
+            states = [(r.robot.odometry(), r.robot.ground_truth(), r.robot.ground_truth_twist()) for r in self._robots]
+        transforms = []
+        for ports, (odom, truth, truth_twist) in zip(self._robots, states, strict=True):
+            ports.odom_pub.publish(
+                odometry_msg(
+                    odom.pose,
+                    Twist2D(odom.v, odom.omega),
+                    now,
+                    frame_id=ports.odom_frame,
+                    child_frame_id=ports.base_frame,
+                )
             )
-        )
+            transforms.append(transform_stamped(odom.pose, now, ports.odom_frame, ports.base_frame))
+            ports.truth_pub.publish(
+                odometry_msg(truth, truth_twist, now, frame_id=cfg.ground_truth_frame, child_frame_id=ports.base_frame)
+            )
         if self._tf is not None:
-            self._tf.sendTransform(transform_stamped(odom.pose, now, cfg.odom_frame, cfg.base_frame))
-        self._truth_pub.publish(
-            odometry_msg(truth, truth_twist, now, frame_id=cfg.ground_truth_frame, child_frame_id=cfg.base_frame)
-        )
+            # one /tf message for every robot: each message costs every tf listener a deserialisation
+            self._tf.sendTransform(transforms)
 
     def _publish_joints(self) -> None:
-        with self._lock:
-            now, wheels = self.sim.time, self.sim.wheels()
-        self._joints_pub.publish(
-            joint_state_msg(
-                WHEEL_JOINTS, (wheels.left_angle, wheels.right_angle), (wheels.left_rate, wheels.right_rate), now
+        with self.lock:
+            now = self.fleet.time
+            wheels = [ports.robot.wheels() for ports in self._robots]
+        for ports, w in zip(self._robots, wheels, strict=True):
+            ports.joints_pub.publish(
+                joint_state_msg(WHEEL_JOINTS, (w.left_angle, w.right_angle), (w.left_rate, w.right_rate), now)
             )
-        )
-
-    def _publish_scan(self, scan: Scan) -> None:
-        self._scan_pub.publish(laser_scan_msg(scan, self.config.scan_frame))
 
     def step(self) -> None:
         """One physics step and whatever publications fall due at its end."""
-        with self._lock:
-            scan = self.sim.step()
-            steps, now, contacts = self.sim.steps, self.sim.time, self.sim.contacts.events
-        if contacts != self._contact_events:
-            self._contact_events = contacts
-            self._contacts_pub.publish(UInt32(data=contacts))
+        with self.lock:
+            scans = self.fleet.step()
+            steps, now = self.fleet.steps, self.fleet.time
+            contacts = [ports.robot.contacts.events for ports in self._robots]
+        for ports, events in zip(self._robots, contacts, strict=True):
+            if events != ports.contact_events:
+                ports.contact_events = events
+                ports.contacts_pub.publish(UInt32(data=events))
         if steps % self._clock_every == 0:
             self._clock_pub.publish(clock_msg(now))
             self._set_own_time(to_ros_time(now))
@@ -286,20 +346,27 @@ class SimulatorNode:
             self._publish_state()
         if steps % self._joints_every == 0:
             self._publish_joints()
-        if scan is not None:
-            self._publish_scan(scan)
+        for ports, scan in zip(self._robots, scans, strict=True):
+            if scan is not None:
+                ports.scan_pub.publish(laser_scan_msg(scan, ports.scan_frame))
+
+    def _blocking_gate(self) -> LockstepGate | None:
+        """In lockstep, the gate of a robot whose controller the simulation must wait for (None: step on)."""
+        now = self.fleet.time
+        return next((p.gate for p in self._robots if p.gate is not None and not p.gate.may_step(now)), None)
 
     def spin(self) -> None:
         """Step until shutdown, paced by ``real_time_factor`` against the wall clock and, in lockstep, held
-        within one control period of the last command."""
-        rtf, gate = self.config.real_time_factor, self._gate
-        self._clock_pub.publish(clock_msg(self.sim.time))
-        wall_start, sim_start = time.monotonic(), self.sim.time
+        within one control period of every robot's last command."""
+        rtf = self.config.real_time_factor
+        self._clock_pub.publish(clock_msg(self.fleet.time))
+        wall_start, sim_start = time.monotonic(), self.fleet.time
         while not rospy.is_shutdown():
-            if gate is not None and not gate.may_step(self.sim.time):
+            gate = self._blocking_gate()
+            if gate is not None:
                 # bounded wait so shutdown is noticed; the wall clock stands still for pacing meanwhile
                 waited_from = time.monotonic()
-                gate.wait_for_command(self.sim.time, 0.1)
+                gate.wait_for_command(self.fleet.time, 0.1)
                 wall_start += time.monotonic() - waited_from
                 continue
             try:
@@ -311,11 +378,11 @@ class SimulatorNode:
                     return
                 raise
             if rtf > 0.0:
-                ahead = (self.sim.time - sim_start) / rtf - (time.monotonic() - wall_start)
+                ahead = (self.fleet.time - sim_start) / rtf - (time.monotonic() - wall_start)
                 if ahead > 0.0:
                     time.sleep(ahead)
                 elif ahead < -_MAX_LAG:
                     # The machine cannot keep this rate: carry on from here rather than bursting to catch up.
-                    wall_start, sim_start = time.monotonic(), self.sim.time
+                    wall_start, sim_start = time.monotonic(), self.fleet.time
             # Flat out (rtf 0) there is no sleep at all: the interpreter's switch interval (5 ms) already lets
             # the cmd_vel and publisher threads run, and yielding every step measured 40 % slower.

@@ -1,11 +1,12 @@
-"""The ODE simulator of a TurtleBot3-Burger-like robot (no ROS): physics, laser, odometry, commands."""
+"""The ODE simulator of TurtleBot3-Burger-like robots, one or several in a world (no ROS): physics, laser,
+odometry, commands."""
 
 from mrs_nav.sim.commands import CommandLimiter, Twist2D
 from mrs_nav.sim.laser import LaserParams, Scan
 from mrs_nav.sim.lockstep import LockstepConfig, LockstepGate
 from mrs_nav.sim.odometry import Odometry
 from mrs_nav.sim.robot import BurgerParams
-from mrs_nav.sim.simulator import ContactStats, Simulator, SimulatorConfig
+from mrs_nav.sim.simulator import ContactStats, MultiRobotSimulator, SimulatedRobot, Simulator, SimulatorConfig
 
 __all__ = [
     "BurgerParams",
@@ -14,8 +15,10 @@ __all__ = [
     "LaserParams",
     "LockstepConfig",
     "LockstepGate",
+    "MultiRobotSimulator",
     "Odometry",
     "Scan",
+    "SimulatedRobot",
     "Simulator",
     "SimulatorConfig",
     "Twist2D",

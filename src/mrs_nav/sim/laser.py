@@ -1,8 +1,9 @@
-"""A 360-degree planar laser scanner (the Burger's LDS) cast with ODE rays against the static obstacles.
+"""A 360-degree planar laser scanner (the Burger's LDS) cast with ODE rays against the obstacles and other robots.
 
 Every beam is an ODE ``GeomRay`` of length ``range_max`` in a space of its own; one ``ode.collide2`` call of
-that space against the obstacle space finds all hits of a scan, and the contact depth of a ray contact is the
-distance from the ray's origin. Beams leave the scanner horizontally at its mounting height.
+that space against each target space (the static obstacles, then every other robot's own space: never the
+scanning robot's, whose chassis surrounds the scanner) finds all hits of a scan, and the contact depth of a ray
+contact is the distance from the ray's origin. Beams leave the scanner horizontally at its mounting height.
 
 Readings follow REP 117: ``+inf`` when nothing is within ``range_max``, ``-inf`` when the hit is closer than
 ``range_min`` (only possible when the robot is pressed against an obstacle). Finite readings get additive
@@ -13,6 +14,7 @@ every scan, hit or not, so the random stream does not depend on what the robot s
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -72,11 +74,11 @@ class Scan:
 
 
 class Laser:
-    """Casts the scanner's beams against an ODE space of static obstacles."""
+    """Casts the scanner's beams against ODE spaces: the static obstacles and the other robots."""
 
-    def __init__(self, obstacle_space: Any, params: LaserParams, rng: np.random.Generator) -> None:
+    def __init__(self, targets: Sequence[Any], params: LaserParams, rng: np.random.Generator) -> None:
         self.params = params
-        self._obstacles = obstacle_space
+        self._targets = tuple(targets)
         self._rng = rng
         self._space = ode.SimpleSpace()
         self._rays = [ode.GeomRay(self._space, params.range_max) for _ in range(params.beams)]
@@ -93,7 +95,7 @@ class Laser:
             self._hits[i] = min(self._hits[i], depth)
 
     def true_ranges(self, base: Pose2D) -> FloatArray:
-        """Noise-free distances (m) to the nearest obstacle per beam, +inf beyond ``range_max``."""
+        """Noise-free distances (m) to the nearest obstacle or other robot per beam, +inf beyond ``range_max``."""
         p = self.params
         scanner = base.compose(Pose2D(p.mount_x, p.mount_y, 0.0))
         origin = (scanner.x, scanner.y, p.mount_z)
@@ -101,7 +103,8 @@ class Laser:
         for ray, c, s in zip(self._rays, np.cos(heading).tolist(), np.sin(heading).tolist(), strict=True):
             ray.set(origin, (c, s, 0.0))
         self._hits.fill(np.inf)
-        collide_spaces(self._space, self._obstacles, self._near)
+        for target in self._targets:
+            collide_spaces(self._space, target, self._near)
         return self._hits.copy()
 
     def scan(self, base: Pose2D, stamp: float) -> Scan:

@@ -1,10 +1,13 @@
-"""Rigid-body physics of the robot among a world's static obstacles, with the Open Dynamics Engine.
+"""Rigid-body physics of one or several robots among a world's static obstacles, with the Open Dynamics Engine.
 
-The robot is three bodies: a chassis (an upright cylinder of the footprint radius, clear of the ground, with a
-frictionless caster sphere at the back) and two wheel spheres on hinge joints driven by velocity motors with a
-torque limit. The world's boxes and cylinders become static ODE geoms; a plane is the ground. Contacts use
-ODE's friction pyramid scaled by the normal force (``Approx1``), so a wheel slips when the motor asks for more
-traction than friction gives, and the odometry (read from the hinges) shows it.
+Each robot (:class:`RobotBody`) is three bodies: a chassis (an upright cylinder of the footprint radius, clear
+of the ground, with a frictionless caster sphere at the back) and two wheel spheres on hinge joints driven by
+velocity motors with a torque limit. The world's boxes and cylinders become static ODE geoms; a plane is the
+ground. Contacts use ODE's friction pyramid scaled by the normal force (``Approx1``), so a wheel slips when the
+motor asks for more traction than friction gives, and the odometry (read from the hinges) shows it. Every
+robot's geoms sit in a space of their own, so robots collide with each other like with a wall (each is told
+the other's name) and a robot's laser can be cast against the other robots' spaces and never against its own
+chassis.
 
 The python3-pyode traps (wrong joint and contact constants, swallowed callback errors, geoms destroyed with
 their Python object) are handled by :mod:`mrs_nav.sim.ode_bindings` and by keeping every geom referenced here.
@@ -17,7 +20,7 @@ generator), so two simulations built alike step identically.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -57,31 +60,142 @@ class WheelState:
     right_rate: float
 
 
-class Physics:
-    """An ODE world holding one Burger-like robot and a :class:`World`'s static obstacles."""
+class RobotBody:
+    """One Burger-like robot's bodies, geoms (in a space of their own) and wheel motors in an ODE world."""
 
-    def __init__(self, world: World, params: BurgerParams, start: Pose2D) -> None:
+    def __init__(self, world: Any, params: BurgerParams, start: Pose2D, name: str) -> None:
+        self.params = params
+        self.name = name
+        self.space = ode.SimpleSpace()
+        p = params
+        rotation = _rotation_z(start.yaw)
+        c, s = math.cos(start.yaw), math.sin(start.yaw)
+
+        def world_point(x: float, y: float, z: float) -> tuple[float, float, float]:
+            return (start.x + c * x - s * y, start.y + s * x + c * y, z)
+
+        self._chassis_z = p.chassis_clearance + p.chassis_height / 2.0
+        self.chassis = ode.Body(world)
+        mass = ode.Mass()
+        mass.setCylinderTotal(p.chassis_mass, 3, p.footprint_radius, p.chassis_height)
+        self.chassis.setMass(mass)
+        self.chassis.setPosition(world_point(p.com_x, 0.0, self._chassis_z))
+        self.chassis.setRotation(rotation)
+        self._chassis_geom = ode.GeomCylinder(self.space, p.footprint_radius, p.chassis_height)
+        self._chassis_geom.setBody(self.chassis)
+        self._chassis_geom.setOffsetPosition((-p.com_x, 0.0, 0.0))
+        self._caster_geom = ode.GeomSphere(self.space, p.caster_radius)
+        self._caster_geom.setBody(self.chassis)
+        self._caster_geom.setOffsetPosition((p.caster_x - p.com_x, 0.0, p.caster_radius - self._chassis_z))
+
+        self._wheel_bodies: list[Any] = []
+        self._wheel_geoms: list[Any] = []
+        self._hinges: list[Any] = []
+        for side in (1.0, -1.0):  # left (+y) first, then right
+            anchor = world_point(0.0, side * p.wheel_separation / 2.0, p.wheel_radius)
+            body = ode.Body(world)
+            wmass = ode.Mass()
+            wmass.setSphereTotal(p.wheel_mass, p.wheel_radius)
+            body.setMass(wmass)
+            body.setPosition(anchor)
+            body.setRotation(rotation)
+            geom = ode.GeomSphere(self.space, p.wheel_radius)
+            geom.setBody(body)
+            hinge = ode.HingeJoint(world)
+            # Rate is body1 relative to body2: with (chassis, wheel) and axis -y (in the body frame) a positive
+            # rate rolls the robot forward.
+            hinge.attach(self.chassis, body)
+            hinge.setAnchor(anchor)
+            hinge.setAxis((s, -c, 0.0))
+            hinge.setParam(PARAM_FMAX, p.wheel_torque_limit)
+            hinge.setParam(PARAM_VEL, 0.0)
+            self._wheel_bodies.append(body)
+            self._wheel_geoms.append(geom)
+            self._hinges.append(hinge)
+        self.surface = {
+            self._chassis_geom: p.body_friction,
+            self._caster_geom: p.caster_friction,
+            self._wheel_geoms[0]: p.wheel_friction,
+            self._wheel_geoms[1]: p.wheel_friction,
+        }
+
+    def set_wheel_rates(self, left_rate: float, right_rate: float) -> None:
+        """Motor targets (rad/s) for the next steps."""
+        self._hinges[0].setParam(PARAM_VEL, left_rate)
+        self._hinges[1].setParam(PARAM_VEL, right_rate)
+
+    def pose(self) -> Pose2D:
+        """True planar pose of ``base_footprint`` in the world frame."""
+        x, y, _ = self.chassis.getRelPointPos((-self.params.com_x, 0.0, 0.0))
+        r = self.chassis.getRotation()
+        return Pose2D(x, y, math.atan2(r[3], r[0]))
+
+    def twist(self) -> tuple[float, float]:
+        """True (forward speed m/s, yaw rate rad/s) of the chassis, in its own frame."""
+        vx, vy, _ = self.chassis.getRelPointVel((-self.params.com_x, 0.0, 0.0))
+        yaw = self.pose().yaw
+        return (vx * math.cos(yaw) + vy * math.sin(yaw), self.chassis.getAngularVel()[2])
+
+    def apply_motion(self, m: Pose2D) -> None:
+        """Move every body by the planar rigid motion ``m`` (world frame) and stop it: hinge angles are kept."""
+        turn = _rotation_z(m.yaw)
+        c, s = math.cos(m.yaw), math.sin(m.yaw)
+        for body in (self.chassis, *self._wheel_bodies):
+            x, y, z = body.getPosition()
+            body.setPosition((m.x + c * x - s * y, m.y + s * x + c * y, z))
+            r = body.getRotation()
+            body.setRotation(
+                tuple(sum(turn[3 * i + k] * r[3 * k + j] for k in range(3)) for i in range(3) for j in range(3))
+            )
+            body.setLinearVel((0.0, 0.0, 0.0))
+            body.setAngularVel((0.0, 0.0, 0.0))
+
+    def height(self) -> float:
+        """Height (m) of the chassis centre: stays near its start unless the robot climbs or sinks."""
+        return float(self.chassis.getPosition()[2])
+
+    def wheels(self) -> WheelState:
+        left, right = self._hinges
+        return WheelState(left.getAngle(), right.getAngle(), left.getAngleRate(), right.getAngleRate())
+
+
+class Physics:
+    """An ODE world holding one or several Burger-like robots and a :class:`World`'s static obstacles.
+
+    Robot ``i`` starts at ``starts[i]`` and is called ``names[i]`` (default ``robot_<i>``) in the contacts the
+    others report; :attr:`robots` gives each one's state.
+    """
+
+    def __init__(
+        self, world: World, params: BurgerParams, starts: Sequence[Pose2D], names: Sequence[str] | None = None
+    ) -> None:
+        names = list(names) if names is not None else [f"robot_{i}" for i in range(len(starts))]
+        if not starts or len(names) != len(starts) or len(set(names)) != len(names):
+            raise InvalidInputError(f"need at least one robot and one distinct name per start, got {names}")
         self.params = params
         self._world = ode.World()
         self._world.setGravity((0.0, 0.0, -GRAVITY))
         self._world.setERP(0.2)
         self._world.setCFM(1e-6)
         self._contacts = ode.JointGroup()
-        # Spaces: the robot's geoms, the ground, the obstacles (which the laser casts against alone).
-        self._robot_space = ode.SimpleSpace()
+        # Spaces: each robot's geoms, the ground, the obstacles (which the laser casts against, with the other
+        # robots' spaces).
         self._ground_space = ode.SimpleSpace()
         self.obstacle_space = ode.HashSpace()
         self._ground = ode.GeomPlane(self._ground_space, (0.0, 0.0, 1.0), 0.0)
         self._obstacles: dict[Any, str] = {}
-        self._touched: set[str] = set()
         self._add_obstacles(world)
-        self._build_robot(start)
-        touching = self._touching_obstacles()
-        if touching:
-            raise InvalidInputError(
-                f"start pose ({start.x:.3f}, {start.y:.3f}) of a robot of radius {params.footprint_radius} m "
-                f"overlaps {', '.join(sorted(touching))} in world {world.name!r}"
-            )
+        self.robots = [RobotBody(self._world, params, start, name) for start, name in zip(starts, names, strict=True)]
+        self._owner = {geom: i for i, robot in enumerate(self.robots) for geom in robot.surface}
+        self._touched: list[set[str]] = [set() for _ in self.robots]
+        for i, start in enumerate(starts):
+            touching = self._touching(i)
+            if touching:
+                who = f"robot {names[i]}" if len(starts) > 1 else "a robot"
+                raise InvalidInputError(
+                    f"start pose ({start.x:.3f}, {start.y:.3f}) of {who} of radius {params.footprint_radius} m "
+                    f"overlaps {', '.join(sorted(touching))} in world {world.name!r}"
+                )
 
     # -- construction -------------------------------------------------------------------------------------------
 
@@ -100,69 +214,25 @@ class Physics:
         geom.setRotation(_rotation_z(box.yaw))
         self._obstacles[geom] = box.name
 
-    def _build_robot(self, start: Pose2D) -> None:
-        p = self.params
-        rotation = _rotation_z(start.yaw)
-        c, s = math.cos(start.yaw), math.sin(start.yaw)
-
-        def world_point(x: float, y: float, z: float) -> tuple[float, float, float]:
-            return (start.x + c * x - s * y, start.y + s * x + c * y, z)
-
-        self._chassis_z = p.chassis_clearance + p.chassis_height / 2.0
-        self.chassis = ode.Body(self._world)
-        mass = ode.Mass()
-        mass.setCylinderTotal(p.chassis_mass, 3, p.footprint_radius, p.chassis_height)
-        self.chassis.setMass(mass)
-        self.chassis.setPosition(world_point(p.com_x, 0.0, self._chassis_z))
-        self.chassis.setRotation(rotation)
-        self._chassis_geom = ode.GeomCylinder(self._robot_space, p.footprint_radius, p.chassis_height)
-        self._chassis_geom.setBody(self.chassis)
-        self._chassis_geom.setOffsetPosition((-p.com_x, 0.0, 0.0))
-        self._caster_geom = ode.GeomSphere(self._robot_space, p.caster_radius)
-        self._caster_geom.setBody(self.chassis)
-        self._caster_geom.setOffsetPosition((p.caster_x - p.com_x, 0.0, p.caster_radius - self._chassis_z))
-
-        self._wheel_bodies: list[Any] = []
-        self._wheel_geoms: list[Any] = []
-        self._hinges: list[Any] = []
-        for side in (1.0, -1.0):  # left (+y) first, then right
-            anchor = world_point(0.0, side * p.wheel_separation / 2.0, p.wheel_radius)
-            body = ode.Body(self._world)
-            wmass = ode.Mass()
-            wmass.setSphereTotal(p.wheel_mass, p.wheel_radius)
-            body.setMass(wmass)
-            body.setPosition(anchor)
-            body.setRotation(rotation)
-            geom = ode.GeomSphere(self._robot_space, p.wheel_radius)
-            geom.setBody(body)
-            hinge = ode.HingeJoint(self._world)
-            # Rate is body1 relative to body2: with (chassis, wheel) and axis -y (in the body frame) a positive
-            # rate rolls the robot forward.
-            hinge.attach(self.chassis, body)
-            hinge.setAnchor(anchor)
-            hinge.setAxis((s, -c, 0.0))
-            hinge.setParam(PARAM_FMAX, p.wheel_torque_limit)
-            hinge.setParam(PARAM_VEL, 0.0)
-            self._wheel_bodies.append(body)
-            self._wheel_geoms.append(geom)
-            self._hinges.append(hinge)
-        self._surface = {
-            self._chassis_geom: p.body_friction,
-            self._caster_geom: p.caster_friction,
-            self._wheel_geoms[0]: p.wheel_friction,
-            self._wheel_geoms[1]: p.wheel_friction,
-        }
-
     # -- stepping -----------------------------------------------------------------------------------------------
 
-    def _touching_obstacles(self) -> set[str]:
+    def _touching(self, index: int) -> set[str]:
+        """Names of the obstacles and other robots that robot ``index`` overlaps now."""
         names: set[str] = set()
 
         def note(g1: Any, g2: Any) -> None:
             if ode.collide(g1, g2):
                 names.add(self._obstacles.get(g1) or self._obstacles[g2])
 
-        collide_spaces(self._robot_space, self.obstacle_space, note)
+        def note_robot(g1: Any, g2: Any) -> None:
+            if ode.collide(g1, g2):
+                names.add(other.name)
+
+        robot = self.robots[index]
+        collide_spaces(robot.space, self.obstacle_space, note)
+        for other in self.robots:
+            if other is not robot:
+                collide_spaces(robot.space, other.space, note_robot)
         return names
 
     def _join(self, g1: Any, g2: Any, contacts: list[Any], mu: float) -> None:
@@ -178,81 +248,63 @@ class Physics:
         contacts = ode.collide(g1, g2)
         if contacts:
             # Each robot part has its own grip on the floor: rubber wheels, a frictionless caster.
-            self._join(g1, g2, contacts, self._surface.get(g1, self._surface.get(g2, 0.0)))
+            robot = self.robots[self._owner.get(g1, self._owner.get(g2, 0))]
+            self._join(g1, g2, contacts, robot.surface.get(g1, robot.surface.get(g2, 0.0)))
 
     def _near_obstacle(self, g1: Any, g2: Any) -> None:
         contacts = ode.collide(g1, g2)
         if contacts:
-            self._touched.add(self._obstacles.get(g1) or self._obstacles[g2])
+            index = self._owner.get(g1, self._owner.get(g2, 0))
+            self._touched[index].add(self._obstacles.get(g1) or self._obstacles[g2])
             self._join(g1, g2, contacts, self.params.body_friction)
 
-    def step(self, left_rate: float, right_rate: float, dt: float) -> set[str]:
-        """Drive the wheel motors at ``left_rate``/``right_rate`` (rad/s) for ``dt`` s.
+    def _near_robot(self, g1: Any, g2: Any) -> None:
+        contacts = ode.collide(g1, g2)
+        if contacts:
+            first, second = self._owner[g1], self._owner[g2]
+            self._touched[first].add(self.robots[second].name)
+            self._touched[second].add(self.robots[first].name)
+            self._join(g1, g2, contacts, self.params.body_friction)
 
-        Returns the names of the obstacles the robot touched during the step (empty if none).
+    def step(self, rates: Sequence[tuple[float, float]], dt: float) -> list[set[str]]:
+        """Drive robot ``i``'s wheel motors at ``rates[i]`` = (left, right) rad/s for ``dt`` s.
+
+        Returns, per robot, the names of the obstacles and robots it touched during the step (empty if none).
         """
-        self._hinges[0].setParam(PARAM_VEL, left_rate)
-        self._hinges[1].setParam(PARAM_VEL, right_rate)
-        self._touched = set()
-        collide_spaces(self._robot_space, self._ground_space, self._near_ground)
-        collide_spaces(self._robot_space, self.obstacle_space, self._near_obstacle)
+        for robot, (left, right) in zip(self.robots, rates, strict=True):
+            robot.set_wheel_rates(left, right)
+        self._touched = [set() for _ in self.robots]
+        for robot in self.robots:
+            collide_spaces(robot.space, self._ground_space, self._near_ground)
+            collide_spaces(robot.space, self.obstacle_space, self._near_obstacle)
+        for i, robot in enumerate(self.robots):
+            for other in self.robots[i + 1 :]:
+                collide_spaces(robot.space, other.space, self._near_robot)
         self._world.step(dt)
         self._contacts.empty()
         return self._touched
 
     # -- state --------------------------------------------------------------------------------------------------
 
-    def pose(self) -> Pose2D:
-        """True planar pose of ``base_footprint`` in the world frame."""
-        x, y, _ = self.chassis.getRelPointPos((-self.params.com_x, 0.0, 0.0))
-        r = self.chassis.getRotation()
-        return Pose2D(x, y, math.atan2(r[3], r[0]))
+    def laser_targets(self, index: int) -> list[Any]:
+        """The ODE spaces robot ``index``'s laser casts against: the obstacles and every other robot."""
+        return [self.obstacle_space, *(r.space for i, r in enumerate(self.robots) if i != index)]
 
-    def twist(self) -> tuple[float, float]:
-        """True (forward speed m/s, yaw rate rad/s) of the chassis, in its own frame."""
-        vx, vy, _ = self.chassis.getRelPointVel((-self.params.com_x, 0.0, 0.0))
-        yaw = self.pose().yaw
-        return (vx * math.cos(yaw) + vy * math.sin(yaw), self.chassis.getAngularVel()[2])
-
-    def move_robot(self, pose: Pose2D) -> None:
-        """Teleport the robot, at rest, so that ``base_footprint`` is at ``pose`` (the kidnapped-robot test).
+    def move_robot(self, index: int, pose: Pose2D) -> None:
+        """Teleport robot ``index``, at rest, so that its ``base_footprint`` is at ``pose`` (the kidnapped-robot
+        test).
 
         Every body is moved by the same planar rigid motion, so the wheels keep their hinge angles and the wheel
-        odometry sees no motion at all. A pose overlapping an obstacle raises InvalidInputError and leaves the
-        robot where it was.
+        odometry sees no motion at all. A pose overlapping an obstacle or another robot raises InvalidInputError
+        and leaves the robot where it was.
         """
-        before = self.pose()
-        motion = pose.compose(before.inverse())
-
-        def apply(m: Pose2D) -> None:
-            turn = _rotation_z(m.yaw)
-            c, s = math.cos(m.yaw), math.sin(m.yaw)
-            for body in (self.chassis, *self._wheel_bodies):
-                x, y, z = body.getPosition()
-                body.setPosition((m.x + c * x - s * y, m.y + s * x + c * y, z))
-                r = body.getRotation()
-                body.setRotation(
-                    tuple(sum(turn[3 * i + k] * r[3 * k + j] for k in range(3)) for i in range(3) for j in range(3))
-                )
-                body.setLinearVel((0.0, 0.0, 0.0))
-                body.setAngularVel((0.0, 0.0, 0.0))
-
-        apply(motion)
-        touching = self._touching_obstacles()
+        robot = self.robots[index]
+        motion = pose.compose(robot.pose().inverse())
+        robot.apply_motion(motion)
+        touching = self._touching(index)
         if touching:
-            apply(motion.inverse())
+            robot.apply_motion(motion.inverse())
             raise InvalidInputError(
                 f"pose ({pose.x:.3f}, {pose.y:.3f}) of a robot of radius {self.params.footprint_radius} m overlaps "
                 f"{', '.join(sorted(touching))}"
             )
-
-    def height(self) -> float:
-        """Height (m) of the chassis centre: stays near its start unless the robot climbs or sinks."""
-        return float(self.chassis.getPosition()[2])
-
-    def wheels(self) -> WheelState:
-        left, right = self._hinges
-        return WheelState(left.getAngle(), right.getAngle(), left.getAngleRate(), right.getAngleRate())
-
-    def obstacle_names(self) -> Iterable[str]:
-        return self._obstacles.values()

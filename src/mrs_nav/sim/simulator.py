@@ -1,11 +1,16 @@
-"""The simulator: a Burger-like robot in a world, stepped at a fixed rate, with laser, odometry and contacts.
+"""The simulator: Burger-like robots in a world, stepped at a fixed rate, with laser, odometry and contacts.
 
-One :meth:`Simulator.step` advances sim time by ``1 / physics_rate`` seconds: the command limiter turns the
-last (v, omega) into wheel-rate targets, ODE steps the bodies, the wheel odometry integrates what the hinges
-turned, contacts with obstacles are counted, and every ``physics_rate / laser.rate``-th step a scan is taken
-(stamped at exact multiples of the laser period). Sim time is ``steps / physics_rate``, never an accumulated
-float. Given the same world, configuration, start pose, seed and command sequence, two simulators produce
-identical states, odometry and scans.
+One step advances sim time by ``1 / physics_rate`` seconds: each robot's command limiter turns its last
+(v, omega) into wheel-rate targets, ODE steps all bodies together, each robot's wheel odometry integrates what
+its hinges turned, contacts with obstacles and other robots are counted per robot, and every
+``physics_rate / laser.rate``-th step each robot takes a scan (stamped at exact multiples of the laser period;
+the other robots are in it). Sim time is ``steps / physics_rate``, never an accumulated float. Given the same
+world, configuration, start poses, seed and command sequences, two simulators produce identical states,
+odometry and scans.
+
+:class:`MultiRobotSimulator` hosts any number of robots (:class:`SimulatedRobot` each); :class:`Simulator` is
+the one-robot API on top of it. Robot ``i`` draws its laser and odometry noise from the ``2i``-th and
+``2i+1``-th children of the seed, so the first robot of a fleet sees exactly what a lone robot would.
 
 No ROS here: the ROS node (``mrs_nav.ros.simulator_node``), the benchmarks and offline scenarios all drive
 this class.
@@ -14,6 +19,7 @@ this class.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -25,7 +31,7 @@ from mrs_nav.maps.world import Box, World
 from mrs_nav.sim.commands import CommandLimiter, Twist2D
 from mrs_nav.sim.laser import Laser, LaserParams, Scan
 from mrs_nav.sim.odometry import Odometry, WheelOdometry
-from mrs_nav.sim.physics import Physics, WheelState
+from mrs_nav.sim.physics import Physics, RobotBody, WheelState
 from mrs_nav.sim.robot import BurgerParams
 
 
@@ -60,7 +66,7 @@ class SimulatorConfig:
 
 @dataclass(frozen=True)
 class ContactStats:
-    """Contacts between the robot and obstacles since the start.
+    """Contacts between a robot and obstacles (or other robots, named as such) since the start.
 
     ``events`` counts contacts begun: a step touching after at least ``CONTACT_GAP`` s without touching (a
     robot pushing against a wall bounces in and out of contact from step to step; that is one collision, not
@@ -77,13 +83,152 @@ class ContactStats:
 CONTACT_GAP = 0.25  # s without touching before a new touch counts as a new contact event
 
 
-class Simulator:
-    """Steps one robot in one world; the Python API behind the ROS node and the benchmarks."""
+class SimulatedRobot:
+    """One robot of a :class:`MultiRobotSimulator`: its commands, wheel odometry, laser and contacts."""
 
-    def __init__(self, world: World, config: SimulatorConfig | None = None, start: Pose2D | None = None) -> None:
+    def __init__(
+        self,
+        physics: Physics,
+        index: int,
+        start: Pose2D,
+        config: SimulatorConfig,
+        *,
+        seeds: tuple[np.random.SeedSequence, np.random.SeedSequence],
+        clock: Callable[[], float],
+    ) -> None:
+        self._physics = physics
+        self._index = index
+        self.start = start
+        self._body: RobotBody = physics.robots[index]
+        self._config = config
+        self._clock = clock
+        laser_seed, odom_seed = seeds
+        self._laser = Laser(physics.laser_targets(index), config.laser, np.random.default_rng(laser_seed))
+        self._odometry = WheelOdometry(config.robot, config.odom_noise, np.random.default_rng(odom_seed), self.start)
+        self._limiter = CommandLimiter(config.robot)
+        self._wheels = self._body.wheels()
+        self._contacts = ContactStats()
+        self._last_touch_step = -(10**9)
+        self._last_scan: Scan | None = None
+
+    @property
+    def name(self) -> str:
+        return self._body.name
+
+    # -- driving (called by the simulator) ----------------------------------------------------------------------
+
+    def wheel_rates(self, dt: float) -> tuple[float, float]:
+        """The wheel-rate targets (rad/s) for the next step of ``dt`` s, from the limited command."""
+        command = self._limiter.update(self._clock(), dt)
+        return self._config.robot.wheel_rates(command.v, command.omega)
+
+    def after_step(self, touched: set[str], steps: int) -> Scan | None:
+        """Integrate odometry and count contacts after physics step number ``steps``; scan if one is due."""
+        dt = self._config.dt
+        wheels = self._body.wheels()
+        self._odometry.update(
+            wrap_angle(wheels.left_angle - self._wheels.left_angle),
+            wrap_angle(wheels.right_angle - self._wheels.right_angle),
+            dt,
+        )
+        self._wheels = wheels
+
+        c = self._contacts
+        new_event = bool(touched) and (steps - self._last_touch_step) * dt > CONTACT_GAP
+        if touched:
+            self._last_touch_step = steps
+        self._contacts = ContactStats(
+            events=c.events + int(new_event),
+            steps=c.steps + int(bool(touched)),
+            obstacles=c.obstacles | touched if touched else c.obstacles,
+            in_contact=bool(touched),
+        )
+
+        if steps % self._config.steps_per_scan == 0:
+            self._last_scan = self.scan_now()
+            return self._last_scan
+        return None
+
+    # -- commanding ---------------------------------------------------------------------------------------------
+
+    def set_command(self, v: float, omega: float) -> Twist2D:
+        """Command forward speed ``v`` (m/s) and turn rate ``omega`` (rad/s); returns them clamped to the limits.
+
+        The command holds until the next one, or until ``command_timeout`` s of sim time pass without one.
+        """
+        return self._limiter.receive(v, omega, self._clock())
+
+    def teleport(self, pose: Pose2D) -> None:
+        """Put the robot, stopped, at ``pose`` (world frame) without its odometry noticing: a kidnapping.
+
+        Raises InvalidInputError if the robot would overlap an obstacle or another robot there (it then stays
+        where it was).
+        """
+        self._physics.move_robot(self._index, pose)
+
+    # -- reading ------------------------------------------------------------------------------------------------
+
+    @property
+    def command(self) -> Twist2D:
+        """The (v, omega) applied at the last step, after limits, ramps and the watchdog."""
+        return self._limiter.current
+
+    @property
+    def watchdog_stopped(self) -> bool:
+        """Whether no command arrived within the timeout, so the robot is being stopped."""
+        return self._limiter.timed_out(self._clock())
+
+    def ground_truth(self) -> Pose2D:
+        """True pose of ``base_footprint`` in the world frame."""
+        return self._body.pose()
+
+    def ground_truth_twist(self) -> Twist2D:
+        """True body velocity (m/s, rad/s) in the robot frame."""
+        v, omega = self._body.twist()
+        return Twist2D(v, omega)
+
+    def odometry(self) -> Odometry:
+        """Wheel odometry in this robot's ``odom`` frame (equal to the world frame at time zero)."""
+        return self._odometry.state(self._clock())
+
+    def wheels(self) -> WheelState:
+        """Wheel hinge angles (rad, wrapped to [-pi, pi]) and rates (rad/s), e.g. for joint_states."""
+        return self._wheels
+
+    @property
+    def last_scan(self) -> Scan | None:
+        return self._last_scan
+
+    def scan_now(self) -> Scan:
+        """A scan from the current pose, outside the laser's schedule (draws from the laser's noise stream)."""
+        return self._laser.scan(self._body.pose(), self._clock())
+
+    @property
+    def contacts(self) -> ContactStats:
+        return self._contacts
+
+    @property
+    def chassis_height(self) -> float:
+        """Height (m) of the chassis centre above the ground; a sanity check that the robot stays upright."""
+        return self._body.height()
+
+
+class MultiRobotSimulator:
+    """Steps several robots in one world: they see each other in their scans and collide physically.
+
+    Robot ``i`` starts at ``starts[i]`` and is named ``names[i]`` (default ``robot_<i>``), the name the other
+    robots' contact statistics report it under.
+    """
+
+    def __init__(
+        self,
+        world: World,
+        config: SimulatorConfig | None = None,
+        starts: Sequence[Pose2D] = (Pose2D(0.0, 0.0, 0.0),),
+        names: Sequence[str] | None = None,
+    ) -> None:
         self.config = config or SimulatorConfig()
         self.world = world
-        self.start = start or Pose2D(0.0, 0.0, 0.0)
         # World files are held to these on loading; a World built in code is held to them here. Every scan casts
         # its rays against every shape, so their number is what bounds the cost of a step.
         shapes = len(world.boxes) + len(world.cylinders)
@@ -91,24 +236,18 @@ class Simulator:
             raise InvalidInputError(
                 f"world {world.name}: {shapes} boxes and cylinders, above the limit of {MAX_SHAPES}"
             )
-        if max(abs(self.start.x), abs(self.start.y)) > MAX_COORDINATE_M:
-            raise InvalidInputError(
-                f"start ({self.start.x:g}, {self.start.y:g}) is more than {MAX_COORDINATE_M:g} m out"
+        for start in starts:
+            if max(abs(start.x), abs(start.y)) > MAX_COORDINATE_M:
+                raise InvalidInputError(f"start ({start.x:g}, {start.y:g}) is more than {MAX_COORDINATE_M:g} m out")
+        self._physics = Physics(world, self.config.robot, starts, names)
+        seeds = np.random.SeedSequence(self.config.seed).spawn(2 * len(starts))
+        self.robots: tuple[SimulatedRobot, ...] = tuple(
+            SimulatedRobot(
+                self._physics, i, start, self.config, seeds=(seeds[2 * i], seeds[2 * i + 1]), clock=lambda: self.time
             )
-        laser_seed, odom_seed = np.random.SeedSequence(self.config.seed).spawn(2)
-        self._physics = Physics(world, self.config.robot, self.start)
-        self._laser = Laser(self._physics.obstacle_space, self.config.laser, np.random.default_rng(laser_seed))
-        self._odometry = WheelOdometry(
-            self.config.robot, self.config.odom_noise, np.random.default_rng(odom_seed), self.start
+            for i, start in enumerate(starts)
         )
-        self._limiter = CommandLimiter(self.config.robot)
         self._steps = 0
-        self._wheels = self._physics.wheels()
-        self._contacts = ContactStats()
-        self._last_touch_step = -(10**9)
-        self._last_scan: Scan | None = None
-
-    # -- driving ------------------------------------------------------------------------------------------------
 
     @property
     def time(self) -> float:
@@ -119,13 +258,6 @@ class Simulator:
     def steps(self) -> int:
         return self._steps
 
-    def set_command(self, v: float, omega: float) -> Twist2D:
-        """Command forward speed ``v`` (m/s) and turn rate ``omega`` (rad/s); returns them clamped to the limits.
-
-        The command holds until the next one, or until ``command_timeout`` s of sim time pass without one.
-        """
-        return self._limiter.receive(v, omega, self.time)
-
     def add_box(self, box: Box) -> None:
         """Put a static box into the world at run time (an obstacle the map does not have); it joins
         :attr:`world`. Raises :class:`InvalidInputError` for a box without finite numbers and positive sizes."""
@@ -135,37 +267,53 @@ class Simulator:
         self._physics.add_box(box)
         self.world = replace(self.world, boxes=(*self.world.boxes, box))
 
+    def step(self) -> list[Scan | None]:
+        """Advance one physics step; returns per robot the scan taken at the end of it, if one was due."""
+        dt = self.config.dt
+        rates = [robot.wheel_rates(dt) for robot in self.robots]
+        touched = self._physics.step(rates, dt)
+        self._steps += 1
+        return [robot.after_step(t, self._steps) for robot, t in zip(self.robots, touched, strict=True)]
+
+
+class Simulator:
+    """Steps one robot in one world; the Python API behind the ROS node and the benchmarks."""
+
+    def __init__(self, world: World, config: SimulatorConfig | None = None, start: Pose2D | None = None) -> None:
+        self.start = start or Pose2D(0.0, 0.0, 0.0)
+        self._sim = MultiRobotSimulator(world, config, (self.start,))
+        self.config = self._sim.config
+        (self._robot,) = self._sim.robots
+
+    @property
+    def world(self) -> World:
+        """The world, with the boxes added at run time."""
+        return self._sim.world
+
+    @property
+    def time(self) -> float:
+        """Sim time (s) since the start."""
+        return self._sim.time
+
+    @property
+    def steps(self) -> int:
+        return self._sim.steps
+
+    def set_command(self, v: float, omega: float) -> Twist2D:
+        """Command forward speed ``v`` (m/s) and turn rate ``omega`` (rad/s); returns them clamped to the limits.
+
+        The command holds until the next one, or until ``command_timeout`` s of sim time pass without one.
+        """
+        return self._robot.set_command(v, omega)
+
+    def add_box(self, box: Box) -> None:
+        """Put a static box into the world at run time (see :meth:`MultiRobotSimulator.add_box`)."""
+        self._sim.add_box(box)
+
     def step(self) -> Scan | None:
         """Advance one physics step; returns the scan taken at the end of it, if one was due."""
-        dt = self.config.dt
-        command = self._limiter.update(self.time, dt)
-        left, right = self.config.robot.wheel_rates(command.v, command.omega)
-        touched = self._physics.step(left, right, dt)
-        self._steps += 1
-
-        wheels = self._physics.wheels()
-        self._odometry.update(
-            wrap_angle(wheels.left_angle - self._wheels.left_angle),
-            wrap_angle(wheels.right_angle - self._wheels.right_angle),
-            dt,
-        )
-        self._wheels = wheels
-
-        c = self._contacts
-        new_event = bool(touched) and (self._steps - self._last_touch_step) * dt > CONTACT_GAP
-        if touched:
-            self._last_touch_step = self._steps
-        self._contacts = ContactStats(
-            events=c.events + int(new_event),
-            steps=c.steps + int(bool(touched)),
-            obstacles=c.obstacles | touched if touched else c.obstacles,
-            in_contact=bool(touched),
-        )
-
-        if self._steps % self.config.steps_per_scan == 0:
-            self._last_scan = self._laser.scan(self._physics.pose(), self.time)
-            return self._last_scan
-        return None
+        (scan,) = self._sim.step()
+        return scan
 
     def run(self, duration: float) -> list[Scan]:
         """Step for ``duration`` s of sim time (rounded to whole steps); returns the scans taken."""
@@ -183,50 +331,47 @@ class Simulator:
 
         Raises InvalidInputError if the robot would overlap an obstacle there (it then stays where it was).
         """
-        self._physics.move_robot(pose)
-
-    # -- reading ------------------------------------------------------------------------------------------------
+        self._robot.teleport(pose)
 
     @property
     def command(self) -> Twist2D:
         """The (v, omega) applied at the last step, after limits, ramps and the watchdog."""
-        return self._limiter.current
+        return self._robot.command
 
     @property
     def watchdog_stopped(self) -> bool:
         """Whether no command arrived within the timeout, so the robot is being stopped."""
-        return self._limiter.timed_out(self.time)
+        return self._robot.watchdog_stopped
 
     def ground_truth(self) -> Pose2D:
         """True pose of ``base_footprint`` in the world frame."""
-        return self._physics.pose()
+        return self._robot.ground_truth()
 
     def ground_truth_twist(self) -> Twist2D:
         """True body velocity (m/s, rad/s) in the robot frame."""
-        v, omega = self._physics.twist()
-        return Twist2D(v, omega)
+        return self._robot.ground_truth_twist()
 
     def odometry(self) -> Odometry:
         """Wheel odometry in the ``odom`` frame (equal to the world frame at time zero)."""
-        return self._odometry.state(self.time)
+        return self._robot.odometry()
 
     def wheels(self) -> WheelState:
         """Wheel hinge angles (rad, wrapped to [-pi, pi]) and rates (rad/s), e.g. for joint_states."""
-        return self._wheels
+        return self._robot.wheels()
 
     @property
     def last_scan(self) -> Scan | None:
-        return self._last_scan
+        return self._robot.last_scan
 
     def scan_now(self) -> Scan:
         """A scan from the current pose, outside the laser's schedule (draws from the laser's noise stream)."""
-        return self._laser.scan(self._physics.pose(), self.time)
+        return self._robot.scan_now()
 
     @property
     def contacts(self) -> ContactStats:
-        return self._contacts
+        return self._robot.contacts
 
     @property
     def chassis_height(self) -> float:
         """Height (m) of the chassis centre above the ground; a sanity check that the robot stays upright."""
-        return self._physics.height()
+        return self._robot.chassis_height
