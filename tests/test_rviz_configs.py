@@ -20,10 +20,11 @@ NODE_SOURCES = "\n".join(p.read_text() for p in (REPO / "src" / "mrs_nav" / "ros
 
 
 def _topics(tree: Any) -> Iterator[str]:
+    """Every ``Topic:`` in the tree, without a robot namespace (``/tb3_1/map`` -> ``/map``, multi_robot.rviz)."""
     if isinstance(tree, dict):
         for key, value in tree.items():
             if key == "Topic" and isinstance(value, str):
-                yield value
+                yield re.sub(r"^/tb3_\d+/", "/", value)
             else:
                 yield from _topics(value)
     elif isinstance(tree, list):
