@@ -12,7 +12,7 @@ import pytest
 
 import mrs_nav
 from mrs_nav.cli.main import SUBCOMMANDS
-from tests.rosharness import REPO
+from tests.rosharness import REPO, ros_env
 
 
 def test_mrs_nav_help_lists_every_subcommand() -> None:
@@ -76,3 +76,17 @@ def test_a_closed_pipe_is_not_an_error() -> None:
     result = subprocess.run(["bash", "-c", cmd], capture_output=True, text=True, env=env, check=False)
     assert result.stdout == '{"success"'
     assert "Traceback" not in result.stderr, result.stderr
+
+
+@pytest.mark.parametrize("launch", sorted((REPO / "launch").glob("*.launch")), ids=lambda p: p.name)
+def test_roslaunch_reads_every_launch_file(launch: Path, tmp_path: Path) -> None:
+    """roslaunch's own loader (``roslaunch --files``: parse, resolve every $(find)/$(arg)/$(eval), list the files
+    included) accepts each launch file with its default arguments; XML that is not well formed, such as ``--``
+    inside a comment, fails here rather than at a user's first launch."""
+    args = ["robot:=tb3_0"] if launch.name == "multi_robot_one.launch" else []  # its one required argument
+    env = ros_env("http://127.0.0.1:1", tmp_path)  # no master: --files only reads
+    result = subprocess.run(
+        ["roslaunch", "--files", str(launch), *args], capture_output=True, text=True, env=env, timeout=60, check=False
+    )
+    assert result.returncode == 0, result.stderr + result.stdout
+    assert str(launch) in result.stdout

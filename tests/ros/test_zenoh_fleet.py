@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -86,3 +87,45 @@ def test_monitor_finds_every_robot_behind_the_router_and_commands_the_one_it_nam
         unknown = mrs_nav("monitor", *connect, "--fleet", "--robot", "tb3_9", "--send-goal", "1,2,0")
         assert unknown.returncode == 1
         assert unknown.stderr.strip() == "ERROR: robot 'tb3_9' is not in the fleet (found: tb3_0, tb3_1, tb3_2)"
+
+
+def test_multi_robot_launch_with_a_router_is_one_fleet(ros_master: RosMaster, rospy_node: Any) -> None:
+    """``multi_robot.launch robots:=2 zenoh_router:=...``: a bridge per robot; the monitor finds both robots with
+    their own pose and map, and a goal sent to tb3_1 reaches tb3_1's navigation and no other."""
+    from nav_msgs.msg import OccupancyGrid
+    from std_msgs.msg import String
+
+    rospy = rospy_node
+    statuses: dict[str, list[str]] = {"tb3_0": [], "tb3_1": []}
+    with contextlib.ExitStack() as stack:
+        router = Router()
+        router.start()
+        stack.callback(router.kill)
+        for name, log in statuses.items():
+            sub = rospy.Subscriber(f"/{name}/rrt_navigation/status", String, lambda m, log=log: log.append(m.data))
+            stack.callback(sub.unregister)
+        args = ("robots:=2", "rviz:=false", "real_time_factor:=0", "lockstep:=true", "allow_goal:=true")
+        proc = stack.enter_context(ros_master.launch("multi_robot.launch", *args, f"zenoh_router:={router.endpoint}"))
+        maps: list[Any] = []
+        sub = rospy.Subscriber("/tb3_1/map", OccupancyGrid, maps.append, queue_size=1)
+        stack.callback(sub.unregister)
+        wait_for(lambda: proc.poll() is not None or bool(maps), 90.0, "tb3_1's first map")
+        assert proc.poll() is None, "roslaunch exited"
+
+        connect = ("--connect", router.endpoint, "--mode", "client", "--timeout", "10")
+        result = mrs_nav("monitor", *connect, "--fleet", "--once", "--duration", "3", "--json")
+        assert result.returncode == 0, result.stderr
+        robots = json.loads(result.stdout)["robots"]
+        assert sorted(robots) == ["tb3_0", "tb3_1"]
+        # multi_robot.launch's default starts; each robot's odometry starts at its true pose
+        for name, (x, y) in (("tb3_0", (-5.0, -5.0)), ("tb3_1", (5.0, -5.0))):
+            pose = robots[name]["pose"]
+            assert math.hypot(pose["x"] - x, pose["y"] - y) < 0.3, (name, pose)
+            assert robots[name]["map"] is not None, name
+
+        sent = mrs_nav("monitor", *connect, "--fleet", "--robot", "tb3_1", "--send-goal", "4,-5,3.14")
+        assert sent.returncode == 0, sent.stderr
+        wait_for(
+            lambda: any("goal (4.00, -5.00" in s for s in statuses["tb3_1"]), 30, "tb3_1's navigation taking the goal"
+        )
+        assert not any("goal (4.00, -5.00" in s for s in statuses["tb3_0"])
