@@ -98,7 +98,8 @@ class DistanceField:
         new = np.unique(key[inside & ~np.isin(key, self._normal_keys)])
         if new.size:
             self._normal_keys = np.concatenate([self._normal_keys, new])
-            self._normals = np.concatenate([self._normals, self._normals_at(new // self.grid.width, new % self.grid.width)])
+            normals = self._normals_at(new // self.grid.width, new % self.grid.width)
+            self._normals = np.concatenate([self._normals, normals])
             order = np.argsort(self._normal_keys)
             self._normal_keys, self._normals = self._normal_keys[order], self._normals[order]
         at = np.minimum(np.searchsorted(self._normal_keys, key), max(self._normal_keys.size - 1, 0))
