@@ -70,8 +70,10 @@ class DistanceField:
             dist = np.full((1, 1), max_distance, dtype=np.float64)
             near = np.zeros((2, 1, 1), dtype=np.int64)
         else:
-            edt, near = ndimage.distance_transform_edt(~occ, return_indices=True)
-            dist = np.minimum(edt * res, max_distance)
+            # The nearest occupied cells give the distances too: the transform need not compute them twice.
+            near = ndimage.distance_transform_edt(~occ, return_distances=False, return_indices=True)
+            rows, cols = np.indices(occ.shape)
+            dist = np.minimum(np.hypot(near[0] - rows, near[1] - cols) * res, max_distance)
         self.distance: FloatArray = np.pad(dist, pad, constant_values=max_distance)
         self.origin_x = grid.origin_x + (x0 - pad) * res
         self.origin_y = grid.origin_y + (y0 - pad) * res
@@ -95,18 +97,25 @@ class DistanceField:
         # A cell's normal depends on the grid only, which does not change while the field is in use, and the
         # refinement's iterations ask for much the same cells: each is computed once.
         key = niy * self.grid.width + nix
-        new = np.unique(key[inside & ~np.isin(key, self._normal_keys)])
+        at, known = self._cached(key)
+        new = np.unique(key[inside & ~known])
         if new.size:
             self._normal_keys = np.concatenate([self._normal_keys, new])
             normals = self._normals_at(new // self.grid.width, new % self.grid.width)
             self._normals = np.concatenate([self._normals, normals])
             order = np.argsort(self._normal_keys)
             self._normal_keys, self._normals = self._normal_keys[order], self._normals[order]
-        at = np.minimum(np.searchsorted(self._normal_keys, key), max(self._normal_keys.size - 1, 0))
+            at, _ = self._cached(key)
         normal = self._normals[at] if self._normals.size else np.full(x.shape, np.nan)
         good = inside & np.isfinite(normal)
         nan = np.full(x.shape, np.nan)
         return np.where(good, hx, nan), np.where(good, hy, nan), np.where(good, normal, nan)
+
+    def _cached(self, key: npt.NDArray[np.int64]) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.bool_]]:
+        """Where each grid flat index ``key`` is (or would go) among the cached normals, and whether it is there."""
+        at = _clamp(np.searchsorted(self._normal_keys, key), max(self._normal_keys.size - 1, 0))
+        known = self._normal_keys[at] == key if self._normal_keys.size else np.zeros(key.shape, dtype=bool)
+        return at, known
 
     def _normals_at(self, niy: npt.NDArray[np.int64], nix: npt.NDArray[np.int64]) -> FloatArray:
         """Surface normal angle (rad) at grid cells ``(niy, nix)``; NaN where fewer than 3 hits are near."""
