@@ -32,6 +32,7 @@ from mrs_nav.resources import CHECKOUT, WORLDS_DIR
 from mrs_nav.sim.simulator import SimulatorConfig
 from mrs_nav.slam.config import SlamConfig
 from mrs_nav.slam.consistency import BROKEN_FRACTION
+from mrs_nav.slam.metrics import windowed_ate
 from mrs_nav.slam.relations import load_relations
 from mrs_nav.slam.sim_drive import OFFICE_LOOP_WAYPOINTS, OFFICE_START, drive_with_slam
 from mrs_nav.tables import markdown_table
@@ -47,9 +48,11 @@ INTEL_CONFIG = SlamConfig(linearUpdate=0.0, angularUpdate=0.0)
 GMAPPING_M = 0.070
 CARTOGRAPHER_M = 0.0229
 REALTIME_TARGET = 20.0
-MS_TARGET = 20.0
+INTEL_MS_TARGET = 10.0  # issue 13: no worse than the ~10 ms CPU per scan before loop closure
+MS_TARGET = 20.0  # the simulated office's 360-beam scans
 OFFICE_ATE_M = 0.01  # issue 13: the simulated office loop after closing it
 MEMORY_TARGET_MB = 500.0
+ATE_WINDOW = 20  # scans: about 13 m of the Intel path
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -118,6 +121,7 @@ def _intel(args: argparse.Namespace) -> str:
     scored = result.relation_errors(relations)
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     free = summary["free_endpoint_fraction"]
+    local_ate = windowed_ate(*result.truth_pairs(), window=ATE_WINDOW)
     rows: list[list[object]] = [
         [
             summary["scans"],
@@ -125,6 +129,7 @@ def _intel(args: argparse.Namespace) -> str:
             f"{scored['relations_rot_mean_deg']:.3f} +- {scored['relations_rot_std_deg']:.3f}",
             scored["relations_reference_trans_mean_m"],
             summary["ate_rmse_m"],
+            local_ate,
             free,
             summary["loops_closed"],
             summary["loops_rejected"],
@@ -140,6 +145,7 @@ def _intel(args: argparse.Namespace) -> str:
         "relations rot [deg]",
         "floor: corrected poses, same bridging [m]",
         "ATE vs corrected log [m]",
+        f"same, {ATE_WINDOW}-scan windows, median [m]",
         "end points on free cells",
         "loops closed",
         "loops rejected",
@@ -158,11 +164,15 @@ def _intel(args: argparse.Namespace) -> str:
         f"- ATE against the corrected log {summary['ate_rmse_m']:.3f} m: agreement with another SLAM's output "
         "(the corrected log), target <= 0.05 m: "
         f"{'PASS' if summary['ate_rmse_m'] <= 0.05 else 'FAIL'}. RPE between consecutive scans against the corrected "
-        "log measures the same agreement, locally; it does not see a loop that failed to close.\n"
+        "log measures the same agreement, locally; it does not see a loop that failed to close. Aligned in "
+        f"windows of {ATE_WINDOW} consecutive scans the two trajectories agree to {local_ate:.3f} m (median): "
+        "the rest of the ATE is the building's global shape differing between two SLAM outputs, of which the "
+        f"corrected log scores {scored['relations_reference_trans_mean_m']:.4f} m on the relations and this "
+        f"trajectory {trans:.4f} m.\n"
         f"- map consistency: {free:.4f} of end points on free cells away from walls, broken-map line "
         f"{BROKEN_FRACTION}: {'PASS' if free <= BROKEN_FRACTION else 'FAIL'}\n"
         f"- median CPU ms per processed 180-beam scan {summary['ms_per_scan_median']:.1f} ms (loop closure on), "
-        f"target <= {MS_TARGET} ms: {'PASS' if summary['ms_per_scan_median'] <= MS_TARGET else 'FAIL'}\n"
+        f"target <= {INTEL_MS_TARGET} ms: {'PASS' if summary['ms_per_scan_median'] <= INTEL_MS_TARGET else 'FAIL'}\n"
         f"- real-time factor by CPU time {summary['realtime_factor']:.1f}x, target >= {REALTIME_TARGET}x: "
         f"{'PASS' if summary['realtime_factor'] >= REALTIME_TARGET else 'FAIL'}\n"
         f"- peak RSS of the bench process {peak_mb:.0f} MB, target <= {MEMORY_TARGET_MB:.0f} MB: "
