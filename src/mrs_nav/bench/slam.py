@@ -10,7 +10,7 @@ corrected scans leaves (the corrected poses themselves scored the same way), ATE
 poses (agreement with another SLAM's output, not ground truth), the map-consistency figure (end points on free
 cells away from walls; the bench fails with an ERROR when it exceeds the broken-map line), peak RSS, CPU time
 per processed scan and the real-time factor by CPU time (the machine is shared). The simulated office: a
-scripted 20 m drive with the core simulator (360-beam scans, 1 % wheel odometry noise), ATE, map IoU.
+scripted 47 m loop with the core simulator (360-beam scans, 1 % wheel odometry noise), ATE, map IoU.
 """
 
 from __future__ import annotations
@@ -32,8 +32,9 @@ from mrs_nav.resources import CHECKOUT, WORLDS_DIR
 from mrs_nav.sim.simulator import SimulatorConfig
 from mrs_nav.slam.config import SlamConfig
 from mrs_nav.slam.consistency import BROKEN_FRACTION
+from mrs_nav.slam.metrics import windowed_ate
 from mrs_nav.slam.relations import load_relations
-from mrs_nav.slam.sim_drive import OFFICE_START, OFFICE_WAYPOINTS, drive_with_slam
+from mrs_nav.slam.sim_drive import OFFICE_LOOP_WAYPOINTS, OFFICE_START, drive_with_slam
 from mrs_nav.tables import markdown_table
 
 # The shared data folder beside the checkout (or beside the folder of git worktrees).
@@ -47,8 +48,11 @@ INTEL_CONFIG = SlamConfig(linearUpdate=0.0, angularUpdate=0.0)
 GMAPPING_M = 0.070
 CARTOGRAPHER_M = 0.0229
 REALTIME_TARGET = 20.0
-MS_TARGET = 20.0
+INTEL_MS_TARGET = 10.0  # issue 13: no worse than the ~10 ms CPU per scan before loop closure
+MS_TARGET = 20.0  # the simulated office's 360-beam scans
+OFFICE_ATE_M = 0.01  # issue 13: the simulated office loop after closing it
 MEMORY_TARGET_MB = 500.0
+ATE_WINDOW = 20  # scans: about 13 m of the Intel path
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -70,7 +74,10 @@ def _office() -> str:
     rows: list[list[object]] = []
     for seed in (1, 2, 3):
         result = drive_with_slam(
-            load_world(OFFICE), OFFICE_START, OFFICE_WAYPOINTS, sim_config=SimulatorConfig(odom_noise=0.01, seed=seed)
+            load_world(OFFICE),
+            OFFICE_START,
+            OFFICE_LOOP_WAYPOINTS,
+            sim_config=SimulatorConfig(odom_noise=0.01, seed=seed),
         )
         rows.append(
             [
@@ -80,21 +87,24 @@ def _office() -> str:
                 result.errors.ate_rmse_deg,
                 result.iou,
                 result.iou_one_cell,
+                result.slam.loops_closed,
                 float(np.median(result.slam_ms)),
                 result.scans_per_second,
             ]
         )
-    header = ["seed", "scans", "ATE [m]", "ATE [deg]", "IoU", "IoU (1 cell tol.)", "ms/scan median", "scans/s"]
+    header = ["seed", "scans", "ATE [m]", "ATE [deg]", "IoU", "IoU (1 cell tol.)", "loops closed", "CPU ms/scan median"]
+    header.append("scans/s (CPU)")
     worst_ate = max(float(r[2]) for r in rows)  # type: ignore[arg-type]
     worst_deg = max(float(r[3]) for r in rows)  # type: ignore[arg-type]
     worst_iou = min(float(r[4]) for r in rows)  # type: ignore[arg-type]
-    ms = float(np.median([float(r[6]) for r in rows]))  # type: ignore[arg-type]
+    ms = float(np.median([float(r[7]) for r in rows]))  # type: ignore[arg-type]
     return (
-        "### Simulated office (20 m scripted drive, 360-beam scans, maxUrange 3 m)\n\n"
+        "### Simulated office loop (47 m scripted drive once round the ring corridor and past the start, "
+        + "360-beam scans with 1 cm noise, 1 % wheel odometry noise, maxUrange 3 m, loop closure on)\n\n"
         + markdown_table(header, rows)
         + "\n\n"
-        + f"- ATE (worst seed) {worst_ate:.4f} m / {worst_deg:.3f} deg, target <= 0.03 m and <= 1 deg: "
-        + f"{'PASS' if worst_ate <= 0.03 and worst_deg <= 1.0 else 'FAIL'}\n"
+        + f"- ATE after closing the loop (worst seed) {worst_ate:.4f} m / {worst_deg:.3f} deg, target <= "
+        + f"{OFFICE_ATE_M} m: {'PASS' if worst_ate <= OFFICE_ATE_M else 'FAIL'}\n"
         + f"- map IoU (worst seed) {worst_iou:.3f}, target >= 0.9: {'PASS' if worst_iou >= 0.9 else 'FAIL'}\n"
         + f"- median ms per processed 360-beam scan {ms:.1f} ms, target <= {MS_TARGET} ms: "
         + f"{'PASS' if ms <= MS_TARGET else 'FAIL'}\n"
@@ -111,6 +121,7 @@ def _intel(args: argparse.Namespace) -> str:
     scored = result.relation_errors(relations)
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     free = summary["free_endpoint_fraction"]
+    local_ate = windowed_ate(*result.truth_pairs(), window=ATE_WINDOW)
     rows: list[list[object]] = [
         [
             summary["scans"],
@@ -118,6 +129,7 @@ def _intel(args: argparse.Namespace) -> str:
             f"{scored['relations_rot_mean_deg']:.3f} +- {scored['relations_rot_std_deg']:.3f}",
             scored["relations_reference_trans_mean_m"],
             summary["ate_rmse_m"],
+            local_ate,
             free,
             summary["loops_closed"],
             summary["loops_rejected"],
@@ -133,6 +145,7 @@ def _intel(args: argparse.Namespace) -> str:
         "relations rot [deg]",
         "floor: corrected poses, same bridging [m]",
         "ATE vs corrected log [m]",
+        f"same, {ATE_WINDOW}-scan windows, median [m]",
         "end points on free cells",
         "loops closed",
         "loops rejected",
@@ -151,11 +164,15 @@ def _intel(args: argparse.Namespace) -> str:
         f"- ATE against the corrected log {summary['ate_rmse_m']:.3f} m: agreement with another SLAM's output "
         "(the corrected log), target <= 0.05 m: "
         f"{'PASS' if summary['ate_rmse_m'] <= 0.05 else 'FAIL'}. RPE between consecutive scans against the corrected "
-        "log measures the same agreement, locally; it does not see a loop that failed to close.\n"
+        "log measures the same agreement, locally; it does not see a loop that failed to close. Aligned in "
+        f"windows of {ATE_WINDOW} consecutive scans the two trajectories agree to {local_ate:.3f} m (median): "
+        "the rest of the ATE is the building's global shape differing between two SLAM outputs, of which the "
+        f"corrected log scores {scored['relations_reference_trans_mean_m']:.4f} m on the relations and this "
+        f"trajectory {trans:.4f} m.\n"
         f"- map consistency: {free:.4f} of end points on free cells away from walls, broken-map line "
         f"{BROKEN_FRACTION}: {'PASS' if free <= BROKEN_FRACTION else 'FAIL'}\n"
         f"- median CPU ms per processed 180-beam scan {summary['ms_per_scan_median']:.1f} ms (loop closure on), "
-        f"target <= {MS_TARGET} ms: {'PASS' if summary['ms_per_scan_median'] <= MS_TARGET else 'FAIL'}\n"
+        f"target <= {INTEL_MS_TARGET} ms: {'PASS' if summary['ms_per_scan_median'] <= INTEL_MS_TARGET else 'FAIL'}\n"
         f"- real-time factor by CPU time {summary['realtime_factor']:.1f}x, target >= {REALTIME_TARGET}x: "
         f"{'PASS' if summary['realtime_factor'] >= REALTIME_TARGET else 'FAIL'}\n"
         f"- peak RSS of the bench process {peak_mb:.0f} MB, target <= {MEMORY_TARGET_MB:.0f} MB: "

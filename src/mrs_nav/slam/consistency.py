@@ -31,9 +31,10 @@ def free_endpoint_fraction(slam: Slam) -> float:
         if record.beams is None or record.beams.hit_ranges.size == 0:
             continue
         sensor = record.pose.compose(record.laser_pose)
-        angles = record.beams.hit_angles + sensor.yaw
-        x = sensor.x + record.beams.hit_ranges * np.cos(angles)
-        y = sensor.y + record.beams.hit_ranges * np.sin(angles)
+        beams = record.beams.split()
+        angles = beams.hit_angles + sensor.yaw
+        x = sensor.x + beams.hit_ranges * np.cos(angles)
+        y = sensor.y + beams.hit_ranges * np.sin(angles)
         ix, iy = grid.cell_of(x, y)
         inside = (ix >= 0) & (ix < grid.width) & (iy >= 0) & (iy < grid.height)
         on_free += int(np.count_nonzero(stray[iy[inside], ix[inside]]))

@@ -70,8 +70,10 @@ class DistanceField:
             dist = np.full((1, 1), max_distance, dtype=np.float64)
             near = np.zeros((2, 1, 1), dtype=np.int64)
         else:
-            edt, near = ndimage.distance_transform_edt(~occ, return_indices=True)
-            dist = np.minimum(edt * res, max_distance)
+            # The nearest occupied cells give the distances too: the transform need not compute them twice.
+            near = ndimage.distance_transform_edt(~occ, return_distances=False, return_indices=True)
+            rows, cols = np.indices(occ.shape)
+            dist = np.minimum(np.hypot(near[0] - rows, near[1] - cols) * res, max_distance)
         self.distance: FloatArray = np.pad(dist, pad, constant_values=max_distance)
         self.origin_x = grid.origin_x + (x0 - pad) * res
         self.origin_y = grid.origin_y + (y0 - pad) * res
@@ -79,6 +81,9 @@ class DistanceField:
         self.grid = grid
         self.near_iy = np.pad(near[0] + y0, pad, constant_values=-1)
         self.near_ix = np.pad(near[1] + x0, pad, constant_values=-1)
+        # Surface normals computed so far (nearest_surface): grid flat index -> angle, sorted by index.
+        self._normal_keys = np.zeros(0, dtype=np.int64)
+        self._normals = np.zeros(0, dtype=np.float64)
 
     def nearest_surface(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """For each point: the mean hit point ``(mx, my)`` (m) of the nearest occupied cell and the angle (rad)
@@ -89,6 +94,31 @@ class DistanceField:
         inside = niy >= 0
         niy, nix = np.maximum(niy, 0), np.maximum(nix, 0)
         hx, hy = self.grid.mean_hits(niy, nix)
+        # A cell's normal depends on the grid only, which does not change while the field is in use, and the
+        # refinement's iterations ask for much the same cells: each is computed once.
+        key = niy * self.grid.width + nix
+        at, known = self._cached(key)
+        new = np.unique(key[inside & ~known])
+        if new.size:
+            self._normal_keys = np.concatenate([self._normal_keys, new])
+            normals = self._normals_at(new // self.grid.width, new % self.grid.width)
+            self._normals = np.concatenate([self._normals, normals])
+            order = np.argsort(self._normal_keys)
+            self._normal_keys, self._normals = self._normal_keys[order], self._normals[order]
+            at, _ = self._cached(key)
+        normal = self._normals[at] if self._normals.size else np.full(x.shape, np.nan)
+        good = inside & np.isfinite(normal)
+        nan = np.full(x.shape, np.nan)
+        return np.where(good, hx, nan), np.where(good, hy, nan), np.where(good, normal, nan)
+
+    def _cached(self, key: npt.NDArray[np.int64]) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.bool_]]:
+        """Where each grid flat index ``key`` is (or would go) among the cached normals, and whether it is there."""
+        at = _clamp(np.searchsorted(self._normal_keys, key), max(self._normal_keys.size - 1, 0))
+        known = self._normal_keys[at] == key if self._normal_keys.size else np.zeros(key.shape, dtype=bool)
+        return at, known
+
+    def _normals_at(self, niy: npt.NDArray[np.int64], nix: npt.NDArray[np.int64]) -> FloatArray:
+        """Surface normal angle (rad) at grid cells ``(niy, nix)``; NaN where fewer than 3 hits are near."""
         offsets = np.arange(-NORMAL_RADIUS, NORMAL_RADIUS + 1)
         oy, ox = (a.ravel() for a in np.meshgrid(offsets, offsets, indexing="ij"))
         gy = np.clip(niy[:, None] + oy[None, :], 0, self.grid.height - 1)
@@ -104,15 +134,13 @@ class DistanceField:
         sxx, syy, sxy = (w * dx * dx).sum(axis=1), (w * dy * dy).sum(axis=1), (w * dx * dy).sum(axis=1)
         # Principal (tangent) direction of the local hits; the normal is perpendicular to it.
         normal = 0.5 * np.arctan2(2.0 * sxy, sxx - syy) + 0.5 * np.pi
-        good = inside & (count >= 3)
-        nan = np.full(x.shape, np.nan)
-        return np.where(good, hx, nan), np.where(good, hy, nan), np.where(good, normal, nan)
+        return np.where(count >= 3, normal, np.nan)
 
     def cells(self, x: FloatArray, y: FloatArray) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
         """Cell indices of points, clipped into the padded window."""
         h, w = self.distance.shape
-        ix = np.clip(np.floor((x - self.origin_x) / self.resolution).astype(np.int64), 0, w - 1)
-        iy = np.clip(np.floor((y - self.origin_y) / self.resolution).astype(np.int64), 0, h - 1)
+        ix = _clamp(np.floor((x - self.origin_x) / self.resolution).astype(np.int64), w - 1)
+        iy = _clamp(np.floor((y - self.origin_y) / self.resolution).astype(np.int64), h - 1)
         return ix, iy
 
     def interpolate(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -130,6 +158,12 @@ class DistanceField:
         gx = ((1 - fv) * (d01 - d00) + fv * (d11 - d10)) / self.resolution
         gy = ((1 - fu) * (d10 - d00) + fu * (d11 - d01)) / self.resolution
         return value, gx, gy
+
+
+def _clamp(index: npt.NDArray[np.int64], highest: int) -> npt.NDArray[np.int64]:
+    """``index`` clipped to ``0..highest`` in place; np.clip's argument checks cost more than the clipping on
+    the matcher's many small arrays."""
+    return np.minimum(np.maximum(index, 0, out=index), highest, out=index)
 
 
 def thin_points(points: FloatArray, spacing: float) -> FloatArray:
@@ -233,8 +267,8 @@ class ScanMatcher:
         ix, iy = field.cells(wx, wy)  # (A, N)
         h, w = table.shape
         # Offsets within the padding never leave the padded table; clip anyway for very far points.
-        cx = np.clip(ix[:, None, :] + offsets[None, :, None], 0, w - 1)  # (A, K, N)
-        cy = np.clip(iy[:, None, :] + offsets[None, :, None], 0, h - 1)
+        cx = _clamp(ix[:, None, :] + offsets[None, :, None], w - 1)  # (A, K, N)
+        cy = _clamp(iy[:, None, :] + offsets[None, :, None], h - 1)
         flat = cy[:, None, :, :] * w + cx[:, :, None, :]  # (A, Kx, Ky, N)
         score = table.ravel()[flat].mean(axis=3)
         ox = (base[0] + offsets) * res / spread[0]

@@ -6,6 +6,9 @@ least-squares rigid fit of the positions (Umeyama / Kabsch in 2-D); the RMS of t
 RPE (Kuemmerle et al., Autonomous Robots 2009): for consecutive pose pairs, the error of the estimated relative
 motion against the true one, ``inv(T_gt_i^-1 T_gt_j) (T_est_i^-1 T_est_j)``; mean translation (m) and
 rotation (deg).
+Windowed ATE (:func:`windowed_ate`): the ATE of stretches of a few dozen consecutive poses, each aligned on its
+own, median over the stretches: how well the two trajectories agree locally, apart from the bends and shifts
+between distant parts that the global ATE sums up.
 """
 
 from __future__ import annotations
@@ -63,3 +66,22 @@ def trajectory_errors(estimate: Sequence[Pose2D], truth: Sequence[Pose2D]) -> Tr
         rpe_trans_mean_m=float(np.mean(trans)),
         rpe_rot_mean_deg=math.degrees(float(np.mean(rot))),
     )
+
+
+def windowed_ate(estimate: Sequence[Pose2D], truth: Sequence[Pose2D], window: int = 20) -> float:
+    """Median over windows of ``window`` consecutive poses (every ``window // 2``) of their ATE RMS (m), each
+    window aligned on its own."""
+    if len(estimate) != len(truth) or len(estimate) < window or window < 2:
+        raise InvalidInputError(
+            f"windowed ATE needs >= {max(window, 2)} matched poses, got {len(estimate)} and {len(truth)}"
+        )
+    est = np.array([[p.x, p.y] for p in estimate])
+    gt = np.array([[p.x, p.y] for p in truth])
+    errors = []
+    for start in range(0, len(est) - window + 1, max(1, window // 2)):
+        e, t = est[start : start + window], gt[start : start + window]
+        angle, shift = align_se2(e, t)
+        c, s = math.cos(angle), math.sin(angle)
+        aligned = np.stack([c * e[:, 0] - s * e[:, 1] + shift[0], s * e[:, 0] + c * e[:, 1] + shift[1]], axis=1)
+        errors.append(math.sqrt(float(np.mean(np.sum((aligned - t) ** 2, axis=1)))))
+    return float(np.median(errors))

@@ -1,8 +1,9 @@
-"""A 2-D pose graph optimised with scipy's sparse nonlinear least squares, with wrong loop edges pruned.
+"""A 2-D pose graph optimised by sparse nonlinear least squares (scipy's SuperLU), with wrong loop edges pruned.
 
 Nodes are poses ``(x, y, yaw)``; an edge ``(i, j, z)`` says that pose ``j`` seen from pose ``i`` is ``z``. The
 residual of an edge is ``z^-1 (x_i^-1 x_j)`` as ``(dx, dy, dyaw)`` scaled by the edge's standard deviations.
-The first pose is held fixed (the map frame); ``scipy.optimize.least_squares`` solves with a sparse Jacobian.
+The first pose is held fixed (the map frame); Levenberg-Marquardt (:func:`_solve`) solves with the analytic sparse
+Jacobian (a finite-difference one cost 4 s of CPU per closure on the 910-pose Intel graph, 70 % of the SLAM's time).
 
 Robustness to false loop closures (:func:`close_loop`): loop edges are added one at a time to a graph that is
 consistent. A true closure agrees with the rest once its drift is spread over the trajectory, so after the solve
@@ -18,8 +19,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
-from scipy.sparse import lil_matrix
+import numpy.typing as npt
+from scipy.sparse import coo_matrix, csr_matrix, diags
+from scipy.sparse.linalg import splu
 
 from mrs_nav.geometry import FloatArray, Pose2D, wrap_angles
 
@@ -38,20 +40,57 @@ class Edge:
 GATE = 4.0  # standard deviations (norm of an edge's three scaled residuals) any edge may keep after a solve
 
 
-def _residuals(flat: FloatArray, first: FloatArray, edges: Sequence[Edge], z: FloatArray, w: FloatArray) -> FloatArray:
-    poses = np.vstack([first, flat.reshape(-1, 3)])
-    i = np.array([e.i for e in edges])
-    j = np.array([e.j for e in edges])
-    xi, xj = poses[i], poses[j]
-    c, s = np.cos(xi[:, 2]), np.sin(xi[:, 2])
-    dx, dy = xj[:, 0] - xi[:, 0], xj[:, 1] - xi[:, 1]
-    # x_i^-1 x_j
-    rx, ry, ryaw = c * dx + s * dy, -s * dx + c * dy, xj[:, 2] - xi[:, 2]
-    # z^-1 (x_i^-1 x_j)
-    cz, sz = np.cos(z[:, 2]), np.sin(z[:, 2])
-    ex, ey = rx - z[:, 0], ry - z[:, 1]
-    res = np.stack([cz * ex + sz * ey, -sz * ex + cz * ey, wrap_angles(ryaw - z[:, 2])], axis=1)
-    return np.asarray((res * w).ravel(), dtype=np.float64)
+@dataclass(frozen=True)
+class _Problem:
+    """The edges as arrays: end nodes, measurements ``z`` (E x 3) and weights ``w`` (1 / sigma, E x 3)."""
+
+    first: FloatArray
+    i: npt.NDArray[np.int64]
+    j: npt.NDArray[np.int64]
+    z: FloatArray
+    w: FloatArray
+
+    @classmethod
+    def of(cls, first: FloatArray, edges: Sequence[Edge]) -> _Problem:
+        z = np.array([[e.measured.x, e.measured.y, e.measured.yaw] for e in edges], dtype=np.float64)
+        w = np.array([[1.0 / e.sigma_xy, 1.0 / e.sigma_xy, 1.0 / e.sigma_yaw] for e in edges], dtype=np.float64)
+        return cls(first, np.array([e.i for e in edges]), np.array([e.j for e in edges]), z, w)
+
+    def _relative(self, flat: FloatArray) -> tuple[FloatArray, ...]:
+        """``x_i^-1 x_j`` per edge as (rx, ry, ryaw), and cos, sin of ``yaw_i`` and of the measured yaw."""
+        poses = np.vstack([self.first, flat.reshape(-1, 3)])
+        xi, xj = poses[self.i], poses[self.j]
+        c, s = np.cos(xi[:, 2]), np.sin(xi[:, 2])
+        dx, dy = xj[:, 0] - xi[:, 0], xj[:, 1] - xi[:, 1]
+        return c * dx + s * dy, -s * dx + c * dy, xj[:, 2] - xi[:, 2], np.cos(self.z[:, 2]), np.sin(self.z[:, 2])
+
+    def residuals(self, flat: FloatArray) -> FloatArray:
+        """``z^-1 (x_i^-1 x_j)`` of every edge, scaled by its weights, flattened."""
+        rx, ry, ryaw, cz, sz = self._relative(flat)
+        ex, ey = rx - self.z[:, 0], ry - self.z[:, 1]
+        res = np.stack([cz * ex + sz * ey, -sz * ex + cz * ey, wrap_angles(ryaw - self.z[:, 2])], axis=1)
+        return np.asarray((res * self.w).ravel(), dtype=np.float64)
+
+    def jacobian(self, flat: FloatArray) -> csr_matrix:
+        """d residuals / d (poses 1..n), sparse: each edge's 3 rows depend on the 3 + 3 values of its nodes."""
+        rx, ry, _, cz, sz = self._relative(flat)
+        poses = np.vstack([self.first, flat.reshape(-1, 3)])
+        ci, si = np.cos(poses[self.i, 2]), np.sin(poses[self.i, 2])
+        n = len(self.i)
+        # d(rx, ry, ryaw) / d(x_i, y_i, yaw_i, x_j, y_j, yaw_j), E x 3 x 6.
+        jr = np.zeros((n, 3, 6))
+        jr[:, 0, :] = np.stack([-ci, -si, ry, ci, si, np.zeros(n)], axis=1)
+        jr[:, 1, :] = np.stack([si, -ci, -rx, -si, ci, np.zeros(n)], axis=1)
+        jr[:, 2, 2], jr[:, 2, 5] = -1.0, 1.0
+        # Rotated into the measurement's frame (z^-1) and weighted.
+        rot = np.zeros((n, 3, 3))
+        rot[:, 0, 0], rot[:, 0, 1], rot[:, 1, 0], rot[:, 1, 1], rot[:, 2, 2] = cz, sz, -sz, cz, 1.0
+        jac = np.einsum("eab,ebc->eac", rot, jr) * self.w[:, :, None]
+        rows = np.broadcast_to((3 * np.arange(n))[:, None, None] + np.arange(3)[None, :, None], jac.shape)
+        node = np.stack([self.i, self.i, self.i, self.j, self.j, self.j], axis=1)
+        cols = np.broadcast_to((3 * (node - 1) + np.tile(np.arange(3), 2))[:, None, :], jac.shape)
+        keep = np.broadcast_to((node > 0)[:, None, :], jac.shape)  # the first pose is fixed
+        return coo_matrix((jac[keep], (rows[keep], cols[keep])), shape=(3 * n, flat.size)).tocsr()
 
 
 def optimise(poses: Sequence[Pose2D], edges: Sequence[Edge], *, max_evaluations: int = 50) -> OptimisedGraph:
@@ -84,21 +123,34 @@ class OptimisedGraph:
 def _solve(
     flat: FloatArray, first: FloatArray, edges: Sequence[Edge], max_evaluations: int
 ) -> tuple[FloatArray, FloatArray]:
-    z = np.array([[e.measured.x, e.measured.y, e.measured.yaw] for e in edges], dtype=np.float64)
-    w = np.array([[1.0 / e.sigma_xy, 1.0 / e.sigma_xy, 1.0 / e.sigma_yaw] for e in edges], dtype=np.float64)
-    n = flat.size
-    sparsity = lil_matrix((3 * len(edges), n), dtype=np.int8)
-    for k, edge in enumerate(edges):
-        for node in (edge.i, edge.j):
-            if node > 0:
-                sparsity[3 * k : 3 * k + 3, 3 * (node - 1) : 3 * node] = 1
-    solution = least_squares(
-        _residuals,
-        flat,
-        jac_sparsity=sparsity,
-        method="trf",
-        x_scale="jac",
-        max_nfev=max_evaluations,
-        args=(first, edges, z, w),
-    )
-    return np.asarray(solution.x, dtype=np.float64), np.asarray(solution.fun, dtype=np.float64)
+    """Levenberg-Marquardt on the normal equations, each step a sparse direct solve (SuperLU).
+
+    scipy's ``least_squares`` with a sparse Jacobian solves its steps iteratively (LSMR), which on a long
+    chain of poses needs hundreds of iterations per step: 0.45 s of CPU per closure on the Intel graph, against
+    a few milliseconds for a direct solve of the block-banded normal equations.
+    """
+    problem = _Problem.of(first, edges)
+    residuals = problem.residuals(flat)
+    cost = float(residuals @ residuals)
+    damping = 1e-4
+    evaluations = 1
+    while evaluations < max_evaluations:
+        jac = problem.jacobian(flat)
+        hess = (jac.T @ jac).tocsc()
+        gradient = jac.T @ residuals
+        diagonal = diags(np.maximum(hess.diagonal(), 1e-12))
+        improved = False
+        while evaluations < max_evaluations and not improved:
+            step = np.asarray(splu((hess + damping * diagonal).tocsc()).solve(-gradient), dtype=np.float64)
+            trial = problem.residuals(flat + step)
+            evaluations += 1
+            trial_cost = float(trial @ trial)
+            improved = trial_cost < cost
+            damping = max(damping / 10.0, 1e-9) if improved else damping * 10.0
+        if not improved:
+            break
+        converged = cost - trial_cost <= 1e-9 * cost or float(np.abs(step).max()) < 1e-7
+        flat, residuals, cost = flat + step, trial, trial_cost
+        if converged:
+            break
+    return flat, residuals

@@ -31,7 +31,7 @@ from mrs_nav.slam.config import MAX_COORDINATE_M, MAX_MAP_CELLS, SlamConfig
 from mrs_nav.slam.grid import LogOddsGrid
 from mrs_nav.slam.matcher import DistanceField, MatchResult, ScanMatcher, thin_points
 from mrs_nav.slam.posegraph import Edge, close_loop
-from mrs_nav.slam.scan import BeamSplit, LaserScanData, split_beams
+from mrs_nav.slam.scan import BeamSplit, LaserScanData, StoredBeams, split_beams
 
 MIN_POINTS = 10  # fewer end points than this: trust odometry, the match would be noise
 FIELD_MAX_DISTANCE = 0.5  # m, truncation of the distance field
@@ -62,7 +62,7 @@ class ProcessedScan:
     odom: Pose2D
     match: MatchResult | None
     laser_pose: Pose2D = dataclasses.field(default_factory=lambda: Pose2D(0.0, 0.0, 0.0))
-    beams: BeamSplit | None = None  # kept to rebuild the map after loop closure
+    beams: StoredBeams | None = None  # kept to rebuild the map after loop closure
     travelled: float = 0.0  # m of path from the first processed scan (by the estimate)
 
 
@@ -147,7 +147,7 @@ class Slam:
             step = pose.relative_to(last.pose)
             travelled = last.travelled + math.hypot(step.x, step.y)
             self.edges.append(Edge(len(self.processed) - 1, len(self.processed), step, *SEQUENTIAL_SIGMA))
-        record = ProcessedScan(stamp, pose, odom, match, mount, beams, travelled)
+        record = ProcessedScan(stamp, pose, odom, match, mount, StoredBeams.of(beams), travelled)
         self.processed.append(record)
         if c.loop_closure and travelled - self._last_loop_attempt >= LOOP_EVERY_M:
             self._last_loop_attempt = travelled
@@ -216,7 +216,7 @@ class Slam:
         )
         for record in submap:
             if record.beams is not None:
-                grid.integrate(record.pose.compose(record.laser_pose), record.beams)
+                grid.integrate(record.pose.compose(record.laser_pose), record.beams.split())
         field = _field(grid, points, prior, LOOP_SEARCH_M)
         if field.empty:
             return None
@@ -228,7 +228,7 @@ class Slam:
         self.grid.clear()
         for record in self.processed:
             if record.beams is not None:
-                self.grid.integrate(record.pose.compose(record.laser_pose), record.beams)
+                self.grid.integrate(record.pose.compose(record.laser_pose), record.beams.split())
         self._mapped = [r.pose for r in self.processed]
 
     def _spread(self, odom: Pose2D) -> tuple[float, float]:

@@ -6,7 +6,7 @@ from hypothesis import strategies as st
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
-from mrs_nav.slam.metrics import trajectory_errors
+from mrs_nav.slam.metrics import trajectory_errors, windowed_ate
 
 TRUTH = [Pose2D(0.1 * i, 0.05 * i * i, 0.1 * i) for i in range(20)]
 
@@ -33,3 +33,15 @@ def test_one_wrong_step_shows_in_rpe_once():
 def test_lengths_must_match():
     with pytest.raises(InvalidInputError, match="matched poses"):
         trajectory_errors(TRUTH[:3], TRUTH[:4])
+
+
+def test_windowed_ate_sees_local_agreement_that_a_bend_hides_from_the_global_ate():
+    # A straight 40-pose track whose second half the estimate bends by 10 degrees at pose 20.
+    truth = [Pose2D(0.5 * i, 0.0, 0.0) for i in range(40)]
+    bend = Pose2D(10.0, 0.0, math.radians(10.0))
+    estimate = [*truth[:20], *(bend.compose(Pose2D(p.x - 10.0, 0.0, 0.0)) for p in truth[20:])]
+    assert trajectory_errors(estimate, truth).ate_rmse_m > 0.2
+    # Windows of 10 every 5 poses: 7 windows, 6 of them on one side of the bend (exact), so the median is 0.
+    assert windowed_ate(estimate, truth, window=10) == pytest.approx(0.0, abs=1e-9)
+    with pytest.raises(InvalidInputError, match="windowed ATE"):
+        windowed_ate(estimate[:5], truth[:5], window=10)
