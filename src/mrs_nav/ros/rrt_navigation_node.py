@@ -150,6 +150,7 @@ class RrtNavigationConfig:
             stop_clearance_m=private_param("stop_clearance", 0.05),
             approach_radius_m=private_param("approach_radius", 0.3),
             allow_unknown=private_param("allow_unknown", True),
+            mark_unknown=private_param("mark_unknown", False),
             stray_distance_m=private_param("stray_distance", 0.3),
             replan_period_s=1.0 / planner_frequency if planner_frequency > 0.0 else math.inf,
             improvement_ratio=private_param("improvement_ratio", 0.85),
