@@ -68,12 +68,6 @@ def _localisation_errors(watch: Drive) -> str:
     )
 
 
-@pytest.mark.xfail(
-    reason="not yet passing on the loaded 2-core machine: mapping, saving and serving work and the first room goal "
-    "was reached in one run, but under navigation.launch the localisation lost the robot (RMS 5-10 m) after a room "
-    "goal, while the same saved map localises within 6 cm in-process on the same route; under investigation",
-    strict=False,
-)
 def test_slam_then_saved_map_then_goals_in_other_rooms(ros_master: RosMaster, rospy_node: Any, tmp_path: Path) -> None:
     rospy = rospy_node
     saved = tmp_path / "office"
