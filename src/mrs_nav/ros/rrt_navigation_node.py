@@ -91,6 +91,8 @@ STATUS_OF_EVENT = {
     EventKind.REACHED: "reached",
     EventKind.FAILED: "failed",
 }
+# s (sim) to wait for tf at a scan's stamp: the odometry of that instant is on its way with the scan
+_SCAN_TF_WAIT = 0.1
 COSTMAP_PERIOD_S = 1.0  # sim seconds between costmap messages at most (rviz redraws a big grid slowly)
 
 
@@ -245,7 +247,7 @@ class RrtNavigationNode:
 
     def _on_scan(self, msg: LaserScan) -> None:
         try:
-            origin, ends, hit = scan_in_frame(self._tf_buffer, msg, self.config.map_frame)
+            origin, ends, hit = scan_in_frame(self._tf_buffer, msg, self.config.map_frame, _SCAN_TF_WAIT)
         except MrsNavError as err:
             rospy.logwarn_throttle(5.0, f"rrt_navigation: dropping scan: {err}")
             return
