@@ -119,7 +119,7 @@ def test_slam_then_saved_map_then_goals_in_other_rooms(ros_master: RosMaster, ro
         # Localised on the saved SLAM map all along (lost, as before the fix, was 5-10 m). Not the 3 cm of tracking
         # on the whole office: beyond the doors the saved map is unknown, so along a corridor and inside the rooms
         # the scans hardly fix the position; in-process on such maps the filter is 8-16 cm RMS off the truth on
-        # this route (1.5 cm on the rasterised world), under navigation.launch 7-11 cm.
+        # this route (1.5 cm on the rasterised world), under navigation.launch 6-13 cm (worst single 0.3 m).
         assert np.sqrt(np.mean(errors[:, 1] ** 2)) < 0.2
     finally:
         truth.close()
