@@ -7,7 +7,7 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from mrs_nav.bag.topics import RECORDED_TOPICS
+from mrs_nav.bag.topics import LOCALISATION_TOPICS, RECORDED_TOPICS
 from tests.rosharness import REPO
 
 LAUNCH = REPO / "launch"
@@ -31,7 +31,7 @@ def test_record_launch_runs_debians_rosbag_record_on_those_topics():
 
 
 def test_session_launch_files_include_recording_on_request():
-    for name in ("simulation.launch", "slam.launch", "rrt_navigation.launch"):
+    for name in ("simulation.launch", "slam.launch", "rrt_navigation.launch", "navigation.launch"):
         path = LAUNCH / name
         if not path.is_file():
             continue  # not on this branch yet
@@ -48,4 +48,11 @@ def test_session_launch_files_include_recording_on_request():
 
 def test_demo_writer_records_the_same_topics():
     session = pytest.importorskip("mrs_nav.bag.session", reason="the demo's bag writer is not on this branch")
-    assert session.SESSION_TOPICS == RECORDED_TOPICS
+    # the demo runs SLAM, not the localisation: everything else
+    others = {t: m for t, m in RECORDED_TOPICS.items() if t not in LOCALISATION_TOPICS}
+    assert others == session.SESSION_TOPICS
+
+
+def test_a_navigation_session_on_a_saved_map_records_the_localisation():
+    assert set(LOCALISATION_TOPICS) == {"/amcl_pose", "/particlecloud"}
+    assert set(LOCALISATION_TOPICS) <= set(_args(LAUNCH / "record.launch")["topics"].split())

@@ -2,17 +2,22 @@
 lockstep, no rviz, no navigation node): the test drives the corridor loop itself, from ground truth, and compares
 /amcl_pose with the true pose at the same stamp. Tracking from a 2D Pose Estimate at the true pose stays within
 3 cm RMS over two minutes, map->odom comes at >= 20 Hz of sim time, a 2D Pose Estimate 0.5 m and 30 degrees off
-converges within 5 s of driving, and bad input (a pose in another frame, a corrupt scan) is survived."""
+converges within 5 s of driving, bad input (a pose in another frame, a corrupt scan) is survived, the
+global_localization service's spread converges within 60 s of driving, and a robot teleported by the simulator
+(``/simulator/set_pose``) is found again within 60 s, and record.launch records /amcl_pose and /particlecloud."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
+from mrs_nav.bag.io import bag_topics
+from mrs_nav.bag.topics import LOCALISATION_TOPICS
 from mrs_nav.geometry import Pose2D, wrap_angle
 from mrs_nav.maps.map_io import save_map
 from mrs_nav.maps.rasterize import rasterize_world
@@ -136,3 +141,103 @@ def test_bad_input_is_logged_and_the_node_carries_on(office_localisation: tuple[
     assert pairs.size > 0
     assert pairs[-1, 1] < 0.1  # still tracking: the pose in frame odom was not taken
     assert math.hypot(truth.x, truth.y) > 1.0
+
+
+def _drive_until_converged(drive: Drive, t0: float, limit: float) -> float | None:
+    """Drive in 2 s steps for up to ``limit`` s of sim time after ``t0``; the sim time from ``t0`` at which the
+    last three estimates were all within 10 cm (converged), or None."""
+    while drive.now - t0 < limit:
+        drive.drive(2.0, 120.0)
+        pairs = drive.since(t0)
+        if len(pairs) >= 3 and np.all(pairs[-3:, 1] < 0.1):
+            return float(pairs[-1, 0] - t0)
+    return None
+
+
+def _teleport(rospy: Any, drive: Drive, pose: Pose2D) -> None:
+    """Set the robot's true pose through the simulator's ``~set_pose`` (its odometry does not notice)."""
+    from geometry_msgs.msg import Pose2D as Pose2DMsg
+
+    pub = rospy.Publisher("/simulator/set_pose", Pose2DMsg, queue_size=1, latch=True)
+    try:
+        wait_for(lambda: pub.get_num_connections() > 0, 30.0, "the simulator on ~set_pose")
+        pub.publish(Pose2DMsg(x=pose.x, y=pose.y, theta=pose.yaw))
+
+        def there() -> bool:
+            with drive.lock:
+                truth = drive.truth[max(drive.truth)] if drive.truth else None
+            return truth is not None and math.hypot(truth.x - pose.x, truth.y - pose.y) < 0.05
+
+        wait_for(there, 30.0, f"the robot teleported to {pose}")
+    finally:
+        pub.unregister()
+
+
+# Global localisation and kidnapping in the office converge in about 9 of 10 seeds (bench/RESULTS.md: the office
+# is nearly symmetric under half and quarter turns), so each test gives the filter a second try from the same
+# start before it fails: a failure then means a broken node, not one unlucky draw.
+ATTEMPTS = 2
+KIDNAP_TO = Pose2D(5.0, 0.0, math.pi / 2.0)  # from the south-west corner to the east corridor, as the bench
+
+
+def test_global_localization_service_converges_within_60_s_of_driving(office_localisation: tuple[Any, Drive]) -> None:
+    rospy, drive = office_localisation
+    from geometry_msgs.msg import PoseArray
+    from std_srvs.srv import Empty
+
+    wait_for(lambda: bool(drive.truth), 30.0, "the ground truth")
+    rospy.wait_for_service("/global_localization", 30.0)
+    clouds: list[Any] = []
+    sub = rospy.Subscriber("/particlecloud", PoseArray, clouds.append, queue_size=100)
+    outcomes = []
+    try:
+        for _ in range(ATTEMPTS):
+            _teleport(rospy, drive, START)  # the bench's start: the same conditions as its 9 of 10
+            t0 = drive.now
+            rospy.ServiceProxy("/global_localization", Empty)()
+            converged = _drive_until_converged(drive, t0, 60.0)
+            outcomes.append((t0, converged, drive.since(t0)[-3:, 1].round(2).tolist()))
+            if converged is not None:
+                break
+    finally:
+        sub.unregister()
+    assert outcomes[-1][1] is not None, f"not converged within 60 s: {outcomes}"
+    t0 = outcomes[-1][0]
+    first = next(c for c in clouds if c.header.stamp.to_sec() >= t0)
+    spread = np.ptp([[p.position.x, p.position.y] for p in first.poses], axis=0)
+    assert np.all(spread > 10.0)  # it did start lost: the particles were spread over the office
+
+
+def test_a_kidnapped_robot_is_found_again_within_60_s_of_driving(office_localisation: tuple[Any, Drive]) -> None:
+    rospy, drive = office_localisation
+    wait_for(lambda: bool(drive.truth), 30.0, "the ground truth")
+    outcomes = []
+    for _ in range(ATTEMPTS):
+        _teleport(rospy, drive, START)
+        t_start = _publish_until_estimate(rospy, drive, initial_pose_msg(rospy, START, (0.0025, 0.0025, 0.0003)))
+        drive.drive(3.0, 120.0)
+        assert drive.since(t_start)[-1, 1] < 0.1  # tracking before the kidnapping
+        t0 = drive.now
+        _teleport(rospy, drive, KIDNAP_TO)
+        converged = _drive_until_converged(drive, t0, 60.0)
+        pairs = drive.since(t0)
+        outcomes.append((converged, float(pairs[:, 1].max()), pairs[-3:, 1].round(2).tolist()))
+        if converged is not None:
+            break
+    converged, worst, _ = outcomes[-1]
+    assert converged is not None, f"not found again within 60 s: {outcomes}"
+    assert worst > 1.0  # the estimate was lost in between: the teleport was not followed by odometry
+
+
+def test_record_launch_records_the_localisation(
+    office_localisation: tuple[Any, Drive], ros_master: RosMaster, tmp_path: Path
+) -> None:
+    _, drive = office_localisation
+    bag = tmp_path / "session.bag"
+    with ros_master.launch("record.launch", f"bag:={bag}", name="record-localisation"):
+        wait_for(Path(f"{bag}.active").is_file, 30.0, "rosbag record")
+        t0 = drive.now
+        wait_for(lambda: drive.since(t0).size > 0 or drive.drive(1.0, 60.0) is not None, 120.0, "an /amcl_pose")
+    wait_for(bag.is_file, 30.0, "rosbag record to close the bag")
+    topics = bag_topics(bag)
+    assert {t: topics.get(t) for t in LOCALISATION_TOPICS} == LOCALISATION_TOPICS

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
@@ -123,5 +124,6 @@ def _defaults(drive: Drive, base: LocalisationConfig, world: World, seeds: int) 
         + "- kidnapped at 20 s to (5, 0, 90 deg), seeds 1-4: found again after "
         + f"{', '.join(_fmt(k) for k in kidnaps)} s; {kidnap_ok}/4 within 60 s "
         + f"({'PASS' if kidnap_ok == 4 else 'FAIL'}: the office is nearly symmetric under half and quarter turns)\n"
-        + "- other developers' jobs were running on the same 2 cores: CPU figures are process time, not wall time\n"
+        + f"- other developers' jobs were running (load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores at "
+        + "the end of the run): CPU figures are process time, not wall time\n"
     )

@@ -25,6 +25,9 @@ class NavigatorConfig:
     # A beam return ahead closer than robot_radius + this (m) stops the robot and makes a new plan.
     stop_clearance_m: float = 0.05
     allow_unknown: bool = True
+    # Mark laser returns in unknown cells as obstacles (navigation.obstacles): on for a static saved map, whose
+    # unknown cells never fill in; off under SLAM, which adds those walls itself.
+    mark_unknown: bool = False
     stray_distance_m: float = 0.3
     replan_period_s: float = 5.0
     improvement_ratio: float = 0.85

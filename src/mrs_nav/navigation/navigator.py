@@ -97,7 +97,7 @@ class Navigator:
         self.last_plan: PlanResult | None = None
         self.plans_made = 0
         self._grid: OccupancyGrid | None = None
-        self._obstacles = ScanObstacles()
+        self._obstacles = ScanObstacles(mark_unknown=self.config.mark_unknown)
         self._marked_grid: OccupancyGrid | None = None
         self._returns: FloatArray = np.zeros((0, 2))
         self._approach: GoalApproach | None = None

@@ -6,9 +6,11 @@ a beam return.
 position and the beam end points, ``hit`` where the beam returned) first clears the marks on the cells every
 beam passed through (up to the cell before its return), then marks the cells of returns that the map has as
 free and that lie farther than ``map_tolerance_m`` from every occupied cell of the map (so range noise on mapped
-walls marks nothing). Returns in unknown cells are left to the map: while SLAM explores they are the walls it is
-about to add, and marking them would re-inflate the planning grid at every scan. The planner then sees the map
-with the marks as occupied (:meth:`ScanObstacles.apply`).
+walls marks nothing). Returns in unknown cells are left to the map while SLAM explores (they are the walls it is
+about to add, and marking them would re-inflate the planning grid at every scan); with ``mark_unknown`` (a static
+saved map, which never fills its unknown cells) they are marked too, or the planner would keep planning through
+the unmapped wall of a room it is in. The planner then sees the map with the marks as occupied
+(:meth:`ScanObstacles.apply`).
 """
 
 from __future__ import annotations
@@ -31,10 +33,11 @@ MAP_TOLERANCE_M = 0.2
 class ScanObstacles:
     """The marked cells of one map (re-projected when a new map of another shape or origin comes)."""
 
-    def __init__(self, map_tolerance_m: float = MAP_TOLERANCE_M) -> None:
+    def __init__(self, map_tolerance_m: float = MAP_TOLERANCE_M, mark_unknown: bool = False) -> None:
         self.map_tolerance_m = map_tolerance_m
+        self.mark_unknown = mark_unknown
         self._raw: OccupancyGrid | None = None
-        self._markable: BoolArray | None = None  # free on the map and away from its obstacles
+        self._markable: BoolArray | None = None  # free (or unknown) on the map and away from its obstacles
         self.marks: BoolArray | None = None
 
     def set_map(self, raw: OccupancyGrid) -> None:
@@ -42,7 +45,8 @@ class ScanObstacles:
         old, marks = self._raw, self.marks
         self._raw = raw
         reach = max(1, math.ceil(self.map_tolerance_m / raw.resolution))
-        self._markable = raw.free_mask & ~ndimage.binary_dilation(raw.occupied_mask, iterations=reach)
+        open_cells = ~raw.occupied_mask if self.mark_unknown else raw.free_mask
+        self._markable = open_cells & ~ndimage.binary_dilation(raw.occupied_mask, iterations=reach)
         self.marks = np.zeros(raw.values.shape, dtype=bool)
         if old is None or marks is None or not marks.any():
             return

@@ -91,6 +91,8 @@ STATUS_OF_EVENT = {
     EventKind.REACHED: "reached",
     EventKind.FAILED: "failed",
 }
+# s (sim) to wait for tf at a scan's stamp: the odometry of that instant is on its way with the scan
+_SCAN_TF_WAIT = 0.1
 COSTMAP_PERIOD_S = 1.0  # sim seconds between costmap messages at most (rviz redraws a big grid slowly)
 
 
@@ -150,6 +152,7 @@ class RrtNavigationConfig:
             stop_clearance_m=private_param("stop_clearance", 0.05),
             approach_radius_m=private_param("approach_radius", 0.3),
             allow_unknown=private_param("allow_unknown", True),
+            mark_unknown=private_param("mark_unknown", False),
             stray_distance_m=private_param("stray_distance", 0.3),
             replan_period_s=1.0 / planner_frequency if planner_frequency > 0.0 else math.inf,
             improvement_ratio=private_param("improvement_ratio", 0.85),
@@ -244,7 +247,7 @@ class RrtNavigationNode:
 
     def _on_scan(self, msg: LaserScan) -> None:
         try:
-            origin, ends, hit = scan_in_frame(self._tf_buffer, msg, self.config.map_frame)
+            origin, ends, hit = scan_in_frame(self._tf_buffer, msg, self.config.map_frame, _SCAN_TF_WAIT)
         except MrsNavError as err:
             rospy.logwarn_throttle(5.0, f"rrt_navigation: dropping scan: {err}")
             return

@@ -507,6 +507,33 @@ def test_marks_are_cleared_when_the_laser_sees_through() -> None:
     assert not cleared.occupied_mask[30:50, 40:60].any()
 
 
+def test_returns_in_unknown_cells_are_marked_only_with_mark_unknown() -> None:
+    # A saved map that only knows the 0.5 m the robot has seen: the wall at x = 0 is unknown on it.
+    world = with_wall(arena(), -0.05, -2.0, 0.05, 0.9)
+    pose = Pose2D(-1.0, -1.0, 0.0)
+    slam = Navigator(astar)
+    slam.set_map(arena(unknown=True), 0.0)
+    slam.set_scan(*scan(world, pose))
+    assert slam.marked_grid is not None
+    assert not slam.marked_grid.is_occupied(np.array([[0.0, -1.0]]))[0]  # left to SLAM, which maps it
+    static = Navigator(astar, NavigatorConfig(mark_unknown=True))
+    static.set_map(arena(unknown=True), 0.0)
+    static.set_scan(*scan(world, pose))
+    assert static.marked_grid is not None
+    assert static.marked_grid.is_occupied(np.array([[-0.04, -1.0]]))[0]
+
+
+def test_on_a_static_map_a_wall_in_unknown_space_is_driven_around_without_contact() -> None:
+    world = with_wall(arena(), -0.05, -2.0, 0.05, 0.9)  # a wall with a gap at the top, unknown on the map
+    nav = Navigator(astar, NavigatorConfig(mark_unknown=True), seed=2)
+    nav.set_map(arena(unknown=True), 0.0)
+    nav.set_goal(1.0, -1.2, 0.0)
+    pose, least = drive_with_scans(nav, world, Pose2D(-1.6, -1.2, 0.0), 300.0)
+    assert nav.state is GoalState.REACHED
+    assert least > BURGER_RADIUS
+    assert math.hypot(pose.x - 1.0, pose.y + 1.2) <= nav.config.approach.xy_tolerance_m + 0.01
+
+
 def test_a_return_right_ahead_stops_the_robot_and_makes_a_new_plan() -> None:
     nav = Navigator(astar)
     nav.set_map(arena(), 0.0)
