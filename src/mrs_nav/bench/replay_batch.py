@@ -21,7 +21,7 @@ from mrs_nav.errors import MrsNavError
 from mrs_nav.options import runs_option
 from mrs_nav.replay.batch import BagJob, find_bags, run_jobs
 from mrs_nav.replay.golden import load_golden
-from mrs_nav.replay.session_replay import PlanOptions
+from mrs_nav.replay.job_options import golden_job
 from mrs_nav.tables import markdown_table
 
 SPEEDUP_TARGET = 0.6  # issue: wall time with 2 workers <= 0.6x the serial time
@@ -45,7 +45,7 @@ def _jobs(source: Path, count: int, folder: Path, out: Path) -> list[BagJob]:
         shutil.copy(original, bag)
         golden = original.with_name(original.stem + ".golden.json")
         load_golden(golden)
-        jobs.append(BagJob(bag, out / bag.stem, (), PlanOptions(), golden))
+        jobs.append(golden_job(bag, out / bag.stem, golden))
     return jobs
 
 

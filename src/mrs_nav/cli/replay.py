@@ -4,7 +4,6 @@ and hold the metrics to golden files; several bags fan out to worker processes o
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import sys
@@ -14,11 +13,8 @@ from typing import Any
 from tqdm import tqdm
 
 from mrs_nav.cli.common import check_writable, fail, print_json
-from mrs_nav.errors import InvalidInputError
-from mrs_nav.limits import MAX_ITERATIONS, MAX_SEED
-from mrs_nav.options import count_option, number_option, runs_option, seed_option
+from mrs_nav.options import number_option, runs_option
 from mrs_nav.replay.batch import (
-    BagJob,
     aggregate,
     find_bags,
     golden_beside,
@@ -27,31 +23,8 @@ from mrs_nav.replay.batch import (
     run_jobs,
 )
 from mrs_nav.replay.golden import dump_json, make_golden
-from mrs_nav.replay.session_replay import PlanOptions
+from mrs_nav.replay.job_options import add_options, golden_job, job_from_args
 from mrs_nav.slam.relations import load_relations
-
-
-def add_options(parser: argparse.ArgumentParser) -> None:
-    """The options that decide what a replay computes (also those a golden file records)."""
-    parser.add_argument("--slam", action="store_true", help="run SLAM over the bag")
-    parser.add_argument("--plan", action="store_true", help="re-plan the recorded goals (implies --slam)")
-    parser.add_argument(
-        "--plan-iterations",
-        type=count_option,
-        default=1500,
-        help=f"RRT* iterations per goal with --plan, 1..{MAX_ITERATIONS} (default: 1500)",
-    )
-    parser.add_argument(
-        "--plan-first", action="store_true", help="stop each re-planning query at its first path (reachability only)"
-    )
-    parser.add_argument("--seed", type=seed_option, default=0, help=f"planner seed with --plan, 0..{MAX_SEED}")
-    parser.add_argument(
-        "--param",
-        action="append",
-        default=[],
-        metavar="NAME=VALUE",
-        help="SLAM parameter with gmapping's name, e.g. --param maxUrange=30 --param linearUpdate=0 (repeatable)",
-    )
 
 
 def register(subparsers: Any) -> None:
@@ -125,33 +98,11 @@ def _options(args: argparse.Namespace) -> list[str]:
     return options
 
 
-def _job(args: argparse.Namespace, bag: Path, out: Path, golden: Path | None) -> BagJob:
-    """The job ``args`` describe for ``bag`` (budgets and seeds are checked by the option types)."""
-    if not (args.slam or args.plan):
-        raise InvalidInputError(f"nothing to do: give --slam and/or --plan (for {bag})")
-    plan = PlanOptions(args.plan_iterations, args.seed, args.plan_first) if args.plan else None
-    return BagJob(bag, out, tuple(args.param), plan, golden)
-
-
-def _golden_job(bag: Path, out: Path, golden: Path) -> BagJob:
-    """The job of a bag held to ``golden``, with the options the golden file recorded."""
-    options = json.loads(golden.read_text(encoding="utf-8")).get("options", [])
-    parser = argparse.ArgumentParser(prog=f"options of {golden}", add_help=False, exit_on_error=False)
-    add_options(parser)
-    try:
-        recorded, unknown = parser.parse_known_args([str(o) for o in options])
-    except argparse.ArgumentError as err:
-        raise InvalidInputError(f"golden file {golden}: bad options: {err}") from None
-    if unknown:
-        raise InvalidInputError(f"golden file {golden}: unknown options {unknown}")
-    return _job(recorded, bag, out, golden)
-
-
 def run(args: argparse.Namespace) -> int:
     if len(args.bags) > 1 or args.bags[0].is_dir():
         return _run_batch(args)
     bag = args.bags[0]
-    job = _job(args, bag, args.out, args.against)
+    job = job_from_args(args, bag, args.out, args.against)
     relations = load_relations(args.relations) if args.relations else None
     if args.relations_offset is not None and not math.isfinite(args.relations_offset):
         return fail(f"--relations-offset must be finite, got {args.relations_offset}")
@@ -199,7 +150,7 @@ def _run_batch(args: argparse.Namespace) -> int:
     for bag in bags:
         out = args.out / bag.name.removesuffix(".active").removesuffix(".bag")
         golden = golden_beside(bag)
-        jobs.append(_golden_job(bag, out, golden) if golden else _job(args, bag, out, None))
+        jobs.append(golden_job(bag, out, golden) if golden else job_from_args(args, bag, out, None))
     bar: Any = tqdm(total=len(jobs), desc="replay", unit="bag") if sys.stderr.isatty() else None
     try:
         outcomes = run_jobs(jobs, args.workers, args.cluster, (lambda _: bar.update()) if bar else None)
