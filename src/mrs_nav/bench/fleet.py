@@ -25,8 +25,7 @@ from typing import Any
 import numpy as np
 
 from mrs_nav.bench.bridge import TOPICS, Receiver, connect_when_up, cpu_seconds
-from mrs_nav.errors import MrsNavError
-from mrs_nav.options import duration_option, runs_option
+from mrs_nav.options import duration_option, integer_option
 from mrs_nav.resources import CHECKOUT
 from mrs_nav.ros_processes import RosProcessError, free_port, process, roscore
 from mrs_nav.tables import markdown_table
@@ -35,13 +34,11 @@ TARGET_P50_MS = 1.0
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--robots", type=runs_option, default=3, help="robots, one bridge each (default 3)")
+    parser.add_argument("--robots", type=integer_option(1, 20), default=3, help="robots, one bridge each (default 3)")
     parser.add_argument("--duration", type=duration_option, default=30.0, help="measured seconds (default 30)")
 
 
 def run(args: argparse.Namespace) -> str:
-    if not 1 <= args.robots <= 20:
-        raise MrsNavError(f"--robots {args.robots}: expected 1 to 20")
     with tempfile.TemporaryDirectory(prefix="mrs_nav_bench_fleet_") as tmp:
         return _measure(Path(tmp), [f"tb3_{i}" for i in range(args.robots)], args.duration)
 
