@@ -8,6 +8,7 @@ export PATH := $(VENV)/bin:$(PATH)
 
 install:
 	@VENV=$(VENV) bash tools/install.sh
+	@$(VENV)/bin/python -m mrs_nav.jit
 
 demo: install
 	$(VENV)/bin/mrs-nav figures --out $(OUT)/figures
