@@ -1,11 +1,12 @@
 """Two robots in one simulated office under one real roslaunch (`multi_robot.launch robots:=2`: one simulator,
-per robot SLAM and RRT* navigation in its namespace), at max rate in lockstep: crossing goals are reached
-without a contact, between the robots or with a wall; the navigation marks the other robot from its laser like
-any obstacle."""
+per robot SLAM, or localisation on a saved map, and RRT* navigation in its namespace), at max rate in lockstep:
+crossing goals are reached without a contact, between the robots or with a wall; the navigation marks the other
+robot from its laser like any obstacle."""
 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -13,6 +14,9 @@ import pytest
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
+from mrs_nav.maps.map_io import save_map
+from mrs_nav.maps.rasterize import rasterize_world
+from mrs_nav.maps.world import load_world
 from tests.ros.navharness import FOOTPRINT_RADIUS, StatusLog, TruthTrack
 from tests.rosharness import RosMaster, wait_for
 
@@ -33,15 +37,26 @@ def _closest_approach(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.min(np.hypot(*(a[ia, 1:] - b[ib, 1:]).T)))
 
 
-def test_two_robots_with_crossing_goals_reach_them_without_contact(ros_master: RosMaster, rospy_node: Any) -> None:
+@pytest.mark.parametrize("saved_map", [False, True], ids=["slam", "localisation on a saved map"])
+def test_two_robots_with_crossing_goals_reach_them_without_contact(
+    ros_master: RosMaster, rospy_node: Any, tmp_path: Path, saved_map: bool
+) -> None:
     rospy = rospy_node
-    from geometry_msgs.msg import PoseStamped
+    from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped
     from nav_msgs.msg import OccupancyGrid
 
+    extra: tuple[str, ...] = ()
+    if saved_map:
+        world = load_world(Path(__file__).resolve().parents[2] / "worlds" / "office.world")
+        extra = (f"map_file:={save_map(rasterize_world(world, 0.05, 0.5), tmp_path / 'office.yaml')}",)
     truths = {name: TruthTrack(rospy, "office.world", name) for name in STARTS}
     status = {name: StatusLog(rospy, f"/{name}/rrt_navigation/status") for name in STARTS}
     maps: dict[str, list[Any]] = {name: [] for name in STARTS}
-    map_subs = [rospy.Subscriber(f"/{name}/map", OccupancyGrid, maps[name].append, queue_size=1) for name in STARTS]
+    # on a saved map every robot navigates on map_server's /map, and the localisation says where it is
+    ready_topic, ready_type = ("/{}/amcl_pose", PoseWithCovarianceStamped) if saved_map else ("/{}/map", OccupancyGrid)
+    map_subs = [
+        rospy.Subscriber(ready_topic.format(name), ready_type, maps[name].append, queue_size=1) for name in STARTS
+    ]
     goal_pubs = {
         name: rospy.Publisher(f"/{name}/move_base_simple/goal", PoseStamped, queue_size=1, latch=True)
         for name in STARTS
@@ -49,7 +64,7 @@ def test_two_robots_with_crossing_goals_reach_them_without_contact(ros_master: R
     poses = [f"pose{i}:={x} {y} {yaw}" for i, (x, y, yaw) in enumerate(STARTS.values())]
     try:
         with ros_master.launch(
-            "multi_robot.launch", "robots:=2", *poses, *MAX_RATE, "rviz:=false", "planner_seed:=5"
+            "multi_robot.launch", "robots:=2", *poses, *MAX_RATE, "rviz:=false", "planner_seed:=5", *extra
         ) as proc:
             wait_for(
                 lambda: (
