@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from mrs_nav.cli.main import main
+from mrs_nav.replay.batch import BagJob, longest_first
 
 BAGS = Path(__file__).resolve().parents[2] / "data" / "bags"
 
@@ -83,3 +84,11 @@ def test_no_scheduler_is_one_error_line(folder: Path, tmp_path: Path, capsys: py
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1
     assert err[0].startswith(f"ERROR: --cluster {address}: no Dask scheduler answered")
+
+
+def test_workers_start_with_the_largest_bag(tmp_path: Path) -> None:
+    sizes = {"short.bag": 10, "long.bag": 300, "middle.bag": 50}
+    for name, size in sizes.items():
+        (tmp_path / name).write_bytes(b"x" * size)
+    jobs = [BagJob(tmp_path / name, tmp_path / "out") for name in (*sizes, "missing.bag")]
+    assert [job.name for job in longest_first(jobs)] == ["long", "middle", "short", "missing"]
