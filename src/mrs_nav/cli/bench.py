@@ -19,6 +19,7 @@ BENCHMARKS = {
     "planners": "planners",
     "simulator": "simulator",
     "slam": "slam",
+    "slam-sweep": "slam_sweep",
     "navigation": "navigation",
     "replay": "replay",
     "replay-batch": "replay_batch",

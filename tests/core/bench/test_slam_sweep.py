@@ -1,0 +1,64 @@
+"""`mrs-nav bench slam-sweep`: logs x parameter grid fanned out to local workers give the serial run's figures."""
+
+from __future__ import annotations
+
+import argparse
+import re
+from pathlib import Path
+
+import pytest
+from tests.core.bag.carmen_fixture import drive, log_lines, write_log
+
+from mrs_nav.bench.slam_sweep import combinations, grid_option
+from mrs_nav.cli.main import main
+
+# Columns of a row that do not depend on where or how fast the job ran (all but the timings).
+FIGURES = slice(0, 7)
+
+
+def _rows(section: str) -> list[list[str]]:
+    lines = [line for line in section.splitlines() if line.startswith("| ") and not line.startswith("| log")]
+    return [[cell.strip() for cell in line.strip("|").split("|")][FIGURES] for line in lines]
+
+
+def _sweep(tmp_path: Path, capsys: pytest.CaptureFixture[str], workers: int) -> str:
+    tmp_path.mkdir()
+    logs = [write_log(tmp_path / f"room{seed}.log", log_lines(drive(), seed=seed)) for seed in (1, 2)]
+    args = ["bench", "slam-sweep", "--no-write", "--workers", str(workers), "--grid", "delta=0.05,0.1"]
+    assert main([*args, "--log", str(logs[0]), "--log", str(logs[1])]) == 0
+    return capsys.readouterr().out
+
+
+def test_two_logs_by_two_values_in_parallel_equal_the_serial_sweep(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    serial = _rows(_sweep(tmp_path / "serial", capsys, 1))
+    parallel = _rows(_sweep(tmp_path / "parallel", capsys, 2))
+    assert [row[:2] for row in serial] == [
+        ["room1", "delta=0.05"],
+        ["room1", "delta=0.1"],
+        ["room2", "delta=0.05"],
+        ["room2", "delta=0.1"],
+    ]
+    assert parallel == serial
+    for row in serial:
+        scans, ate, verdict = int(row[2]), float(row[4]), row[6]
+        assert scans > 50
+        assert ate < 0.1, row  # the synthetic room's drive is mapped, not broken
+        assert verdict == "ok"
+
+
+def test_grid_values_are_checked_as_slam_parameters() -> None:
+    assert grid_option("delta=0.05, 0.1") == ("delta", ("0.05", "0.1"))
+    assert combinations([("a", ("1", "2")), ("b", ("x",))]) == [("a=1", "b=x"), ("a=2", "b=x")]
+    with pytest.raises(argparse.ArgumentTypeError, match=re.escape("delta must be in")):
+        grid_option("delta=0.05,-1")
+    with pytest.raises(argparse.ArgumentTypeError, match="expected NAME=V1,V2"):
+        grid_option("delta")
+
+
+def test_a_bad_grid_is_one_error_line(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["bench", "slam-sweep", "--no-write", "--grid", "nosuch=1,2"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    assert "nosuch" in err[0]
