@@ -7,10 +7,10 @@ import re
 from pathlib import Path
 
 import pytest
-from tests.core.bag.carmen_fixture import drive, log_lines, write_log
 
 from mrs_nav.bench.slam_sweep import combinations, grid_option
 from mrs_nav.cli.main import main
+from tests.core.bag.carmen_fixture import drive, log_lines, write_log
 
 # Columns of a row that do not depend on where or how fast the job ran (all but the timings).
 FIGURES = slice(0, 7)
