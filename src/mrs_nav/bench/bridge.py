@@ -79,6 +79,7 @@ class Receiver:
     the attachments, which carry the time the bridge's rospy callback got the message."""
 
     def __init__(self, topics: Iterable[str] = TOPICS) -> None:
+        topics = tuple(topics)  # read twice (the fleet bench passes a generator)
         self.times: dict[str, dict[int, float]] = {t: {} for t in topics}
         self.attachments: dict[str, dict[int, bytes]] = {t: {} for t in topics}
         self.lock = threading.Lock()
