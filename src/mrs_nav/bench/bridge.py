@@ -30,6 +30,7 @@ import numpy as np
 
 from mrs_nav.bridge.certs import make_ca, make_cert
 from mrs_nav.bridge.session import open_client_session
+from mrs_nav.bridge.wire import decode_attachment
 from mrs_nav.errors import MrsNavError
 from mrs_nav.options import duration_option
 from mrs_nav.resources import CHECKOUT
@@ -74,19 +75,29 @@ def cpu_seconds(pid: int) -> float:
 
 
 class Receiver:
-    """Zenoh receive times (wall clock, s) per ROS topic (the key without its first chunk) and header.seq."""
+    """Zenoh receive times (wall clock, s) per ROS topic (the key without its first chunk) and header.seq, and
+    the attachments, which carry the time the bridge's rospy callback got the message."""
 
     def __init__(self, topics: Iterable[str] = TOPICS) -> None:
+        topics = tuple(topics)  # read twice (the fleet bench passes a generator)
         self.times: dict[str, dict[int, float]] = {t: {} for t in topics}
+        self.attachments: dict[str, dict[int, bytes]] = {t: {} for t in topics}
         self.lock = threading.Lock()
 
     def __call__(self, sample: Any) -> None:
         now = time.time()
         topic = "/" + str(sample.key_expr).split("/", 1)[1]
         seq = int.from_bytes(sample.payload.to_bytes()[:4], "little")
+        attachment = sample.attachment
         with self.lock:
             if topic in self.times:
                 self.times[topic][seq] = now
+                if attachment is not None:
+                    self.attachments[topic][seq] = attachment.to_bytes()
+
+    def bridge_times(self, topic: str) -> dict[int, float]:
+        """header.seq -> wall-clock time (s) at which the bridge's ROS callback got the message."""
+        return {seq: decode_attachment(a).receive_time_ns * 1e-9 for seq, a in self.attachments[topic].items()}
 
 
 def run(args: argparse.Namespace) -> str:
@@ -126,7 +137,7 @@ def _measure(tmp: Path, duration: float) -> str:
             if peer.returncode != 0 or not out.exists():
                 log = (tmp / "peer.log").read_text(errors="replace")[-2000:]
                 raise RosProcessError(f"bench bridge: the ROS peer failed ({peer.returncode}):\n{log}")
-    return _report(json.loads(out.read_text()), [r.times for r in receivers], cpu, rss, duration)
+    return _report(json.loads(out.read_text()), receivers, cpu, rss, duration)
 
 
 def connect_when_up(endpoint: str, config_file: str, bridge: subprocess.Popen[bytes]) -> Any:
@@ -145,39 +156,48 @@ def connect_when_up(endpoint: str, config_file: str, bridge: subprocess.Popen[by
 
 def _report(
     report: dict[str, Any],
-    zenoh_times: list[dict[str, dict[int, float]]],
+    receivers: list[Receiver],
     cpu: float,
     rss: list[tuple[float, float]],
     duration: float,
 ) -> str:
     rows: list[list[object]] = []
     all_added: list[float] = []
+    per_subscriber: list[list[float]] = [[] for _ in receivers]
+    ros_hop: list[float] = []  # the bridge's rospy callback minus the direct subscriber's
+    zenoh_hop: list[float] = []  # a Zenoh subscriber's callback minus the bridge's rospy callback
     lost_total = 0
     for topic, rate in TOPICS.items():
         sent = report[topic]["sent"]
         direct = {int(k): v for k, v in report[topic]["direct"].items()}
-        lost = sum(any(seq not in times[topic] for times in zenoh_times) for seq in sent)
+        lost = sum(any(seq not in r.times[topic] for r in receivers) for seq in sent)
         lost_total += lost
-        added = np.array(
-            [
-                (times[topic][s] - direct[s]) * 1e3
-                for times in zenoh_times
-                for s in sent
-                if s in times[topic] and s in direct
-            ]
-        )
-        all_added.extend(added.tolist())
-        p50, p99, worst = np.percentile(added, [50, 99, 100]) if added.size else (np.nan,) * 3
+        added: list[float] = []
+        for receiver, mine in zip(receivers, per_subscriber, strict=True):
+            got, at_bridge = receiver.times[topic], receiver.bridge_times(topic)
+            both = [s for s in sent if s in got and s in direct]
+            values = [(got[s] - direct[s]) * 1e3 for s in both]
+            mine.extend(values)
+            added.extend(values)
+            ros_hop.extend((at_bridge[s] - direct[s]) * 1e3 for s in both if s in at_bridge)
+            zenoh_hop.extend((got[s] - at_bridge[s]) * 1e3 for s in both if s in at_bridge)
+        all_added.extend(added)
+        p50, p99, worst = np.percentile(added, [50, 99, 100]) if added else (np.nan,) * 3
         rows.append(
             [topic, f"{rate:g}", len(sent), sum(s in direct for s in sent), len(sent) - lost, lost, p50, p99, worst]
         )
-    overall = np.array(all_added)
-    p50, p99 = np.percentile(overall, [50, 99]) if overall.size else (np.nan, np.nan)
+    p50, p99 = np.percentile(all_added, [50, 99]) if all_added else (np.nan, np.nan)
     table = markdown_table(
         ["topic", "Hz", "sent", "direct ROS got", f"all {SUBSCRIBERS} got", "lost", "added p50 ms", "added p99 ms",
          "added max ms"],
         rows,
     )  # fmt: skip
+    hops = ", ".join(
+        f"{name} p50 {np.percentile(values, 50):.3f} ms / p99 {np.percentile(values, 99):.3f} ms"
+        for name, values in (("ROS to the bridge's callback", ros_hop), ("bridge callback to subscriber", zenoh_hop))
+        if values
+    )
+    subscribers = ", ".join(f"{np.percentile(v, 50):.3f}" for v in per_subscriber if v)
     t, mb = np.array(rss).T if rss else (np.zeros(1), np.zeros(1))
     settled = t >= SETTLE * t[-1]  # connections and buffers grow in the first seconds: not a leak
     slope = float(np.polyfit(t[settled], mb[settled], 1)[0]) * 60 if settled.sum() > 2 else math.nan
@@ -188,7 +208,10 @@ def _report(
         f"subscriber's receive time for the same message, over {SUBSCRIBERS} remote subscribers (client sessions "
         "of this process) of the bridge running as the robot's Zenoh router with mutual TLS and its access "
         f"control on (loopback, one machine).\n\n{table}\n\n"
-        f"All topics: added latency p50 {p50:.3f} ms, p99 {p99:.3f} ms; {lost_total} lost; bridge CPU "
+        f"All topics: added latency p50 {p50:.3f} ms, p99 {p99:.3f} ms; {lost_total} lost. Split at the bridge's "
+        f"receive time (its attachment, same clock): {hops}. Added p50 per subscriber, in the order their "
+        f"sessions were opened: {subscribers} ms.\n"
+        f"Bridge CPU "
         f"{cpu:.1f} % of one core (load average {load:.1f} on {cores} cores); bridge RSS "
         f"{mb[0]:.1f} MB at the start, {mb[settled][0]:.1f} MB at {SETTLE:.0%} of the run, {mb[-1]:.1f} MB at the end, "
         f"{mb.max():.1f} MB at most; drift {slope:+.3f} MB/min (least squares over the last {1 - SETTLE:.0%} of "
