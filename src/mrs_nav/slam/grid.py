@@ -28,6 +28,10 @@ from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.slam.scan import BeamSplit
 
 IntArray = npt.NDArray[np.int64]
+# A grid as compiled kernels take it (LogOddsGrid.kernel_args): log-odds, hit offset sums, hit counts, origin x,
+# origin y and resolution (m); and that as a numba type.
+GridArrays = tuple[npt.NDArray[np.float32], npt.NDArray[np.float32], npt.NDArray[np.float32], float, float, float]
+GRID_ARRAYS_TYPE = "Tuple((float32[:, ::1], float32[:, :, ::1], float32[:, ::1], float64, float64, float64))"
 
 # map_server's default occupied_thresh 0.65 as log-odds; a cell more likely free than occupied is free.
 OCCUPIED_LOGODDS = math.log(0.65 / 0.35)
@@ -183,6 +187,10 @@ class LogOddsGrid:
         dx = np.where(count > 0, self.hit_sum[0, iy, ix] / safe, 0.5 * res)
         dy = np.where(count > 0, self.hit_sum[1, iy, ix] / safe, 0.5 * res)
         return self.origin_x + ix * res + dx, self.origin_y + iy * res + dy
+
+    def kernel_args(self) -> GridArrays:
+        """The grid's arrays and geometry, for compiled kernels (they see the arrays, not copies)."""
+        return self.logodds, self.hit_sum, self.hit_count, self.origin_x, self.origin_y, self.resolution
 
     def occupied(self) -> npt.NDArray[np.bool_]:
         """Cells that are more likely occupied than free (what the scan matcher aligns to)."""
