@@ -71,23 +71,29 @@ class DistanceField:
         y1 = min(grid.height, math.ceil((bounds[3] - grid.origin_y) / res) + 1)
         self.resolution = res
         self.max_distance = max_distance
-        occ = grid.occupied()[y0:y1, x0:x1] if x1 > x0 and y1 > y0 else np.zeros((0, 0), dtype=bool)
+        # The window only: the whole map's occupied() would cost O(map) per scan.
+        occ = grid.logodds[y0:y1, x0:x1] > 0.0 if x1 > x0 and y1 > y0 else np.zeros((0, 0), dtype=bool)
         self.empty = not bool(occ.any())
-        if self.empty:
-            dist = np.full((1, 1), max_distance, dtype=np.float64)
-            near = np.zeros((2, 1, 1), dtype=np.int32)
-        else:
-            # The nearest occupied cells give the distances too: the transform need not compute them twice.
-            near = ndimage.distance_transform_edt(~occ, return_distances=False, return_indices=True)
-            rows, cols = np.indices(occ.shape)
-            dist = np.minimum(np.hypot(near[0] - rows, near[1] - cols) * res, max_distance)
-        self.distance: FloatArray = np.pad(dist, pad, constant_values=max_distance)
         self.origin_x = grid.origin_x + (x0 - pad) * res
         self.origin_y = grid.origin_y + (y0 - pad) * res
-        # Grid indices of the nearest occupied cell, per window cell (-1 in the padding).
         self.grid = grid
-        self.near_iy = np.pad(near[0] + y0, pad, constant_values=-1)
-        self.near_ix = np.pad(near[1] + x0, pad, constant_values=-1)
+        # Squared distance in cells to the nearest occupied cell, capped where the distance reaches the
+        # truncation: distances, and the matcher's likelihoods, take only these few values, so they are
+        # computed once per value (distance_table) and looked up per cell.
+        cap = math.ceil((max_distance / res) ** 2) + 1
+        self.distance_table: FloatArray = np.minimum(np.sqrt(np.arange(cap + 1)) * res, max_distance)
+        self.squared: CellArray
+        # Grid indices of the nearest occupied cell, per window cell (-1 in the padding).
+        self.near_iy: CellArray
+        self.near_ix: CellArray
+        if self.empty:
+            shape = (1 + 2 * pad, 1 + 2 * pad)
+            self.squared = np.full(shape, cap, dtype=np.int32)
+            self.near_iy = self.near_ix = np.full(shape, -1, dtype=np.int32)
+        else:
+            near = ndimage.distance_transform_edt(~occ, return_distances=False, return_indices=True)
+            self.squared, self.near_iy, self.near_ix = _padded_field(near, pad, y0, x0, cap)
+        self.distance: FloatArray = self.distance_table[self.squared]
 
     def nearest_surface(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """For each point: the mean hit point ``(mx, my)`` (m) of the nearest occupied cell and the angle (rad)
@@ -172,12 +178,10 @@ class ScanMatcher:
         """
         if field.empty or points.shape[0] < 3:
             return MatchResult(prior, 0.0, 0.0)
-        likelihood = np.exp(-(field.distance**2) / (2.0 * self.sigma**2))
         # The coarse level also uses a wider likelihood: its 1-degree heading steps move far points by more
         # than a cell, and a too-sharp score would rank the right block below a lucky wrong one.
         sigma_c = max(self.sigma, 0.5 * COARSE * field.resolution)
-        wide = np.exp(-(field.distance**2) / (2.0 * sigma_c**2))
-        pooled = ndimage.maximum_filter(wide, size=COARSE + 1, mode="nearest")
+        likelihood, pooled = _likelihoods(field.squared, field.distance_table, self.sigma, sigma_c, COARSE // 2)
         res = field.resolution
         n_lin = max(1, math.ceil(self.search_linear / (COARSE * res)))
         n_ang = max(1, math.ceil(self.search_angular / COARSE_ANGLE))
@@ -452,3 +456,60 @@ def _table_means(  # noqa: PLR0917 - numba kernels take positional arguments
                     total += table[row, col]
                 out[a, kx, ky] = total / n
     return out
+
+
+@numba.njit(  # type: ignore[misc]
+    "UniTuple(int32[:, ::1], 3)(int32[:, :, ::1], int64, int64, int64, int64)", cache=True
+)
+def _padded_field(near: CellArray, pad: int, y0: int, x0: int, cap: int) -> tuple[CellArray, CellArray, CellArray]:
+    """DistanceField's arrays from the window's nearest occupied cells ``near`` (window indices, as
+    ``distance_transform_edt`` gives them; the window's corner is grid cell ``(y0, x0)``): the squared distance
+    in cells (at most ``cap``) and the nearest cell's grid indices, padded by ``pad`` cells of ``cap`` and -1."""
+    height, width = near.shape[1], near.shape[2]
+    shape = (height + 2 * pad, width + 2 * pad)
+    squared = np.full(shape, cap, dtype=np.int32)
+    near_iy = np.full(shape, -1, dtype=np.int32)
+    near_ix = np.full(shape, -1, dtype=np.int32)
+    for row in range(height):
+        for col in range(width):
+            ny, nx = near[0, row, col], near[1, row, col]
+            squared[row + pad, col + pad] = min((ny - row) ** 2 + (nx - col) ** 2, cap)
+            near_iy[row + pad, col + pad] = ny + y0
+            near_ix[row + pad, col + pad] = nx + x0
+    return squared, near_iy, near_ix
+
+
+@numba.njit(  # type: ignore[misc]
+    "UniTuple(float64[:, ::1], 2)(int32[:, ::1], float64[::1], float64, float64, int64)", cache=True
+)
+def _likelihoods(
+    squared: CellArray, distance_table: FloatArray, sigma: float, sigma_coarse: float, half: int
+) -> tuple[FloatArray, FloatArray]:
+    """The likelihood field ``exp(-d^2 / (2 sigma^2))`` of the distances ``distance_table[squared]`` (m), and
+    the coarse one (``sigma_coarse``) max-pooled over ``2 half + 1`` cells square (edge cells repeated beyond
+    the edge)."""
+    fine_table = np.exp(-(distance_table**2) / (2.0 * sigma**2))
+    wide_table = np.exp(-(distance_table**2) / (2.0 * sigma_coarse**2))
+    height, width = squared.shape
+    likelihood = np.empty((height, width))
+    wide = np.empty((height, width))
+    for row in range(height):
+        for col in range(width):
+            likelihood[row, col] = fine_table[squared[row, col]]
+            wide[row, col] = wide_table[squared[row, col]]
+    # Separable: the maximum over columns, then over rows.
+    across = np.empty((height, width))
+    for row in range(height):
+        for col in range(width):
+            best = wide[row, max(col - half, 0)]
+            for c in range(max(col - half, 0) + 1, min(col + half, width - 1) + 1):
+                best = max(best, wide[row, c])
+            across[row, col] = best
+    pooled = np.empty((height, width))
+    for row in range(height):
+        for col in range(width):
+            best = across[max(row - half, 0), col]
+            for r in range(max(row - half, 0) + 1, min(row + half, height - 1) + 1):
+                best = max(best, across[r, col])
+            pooled[row, col] = best
+    return likelihood, pooled

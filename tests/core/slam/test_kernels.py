@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy import ndimage
 
 from mrs_nav.geometry import Pose2D, wrap_angle
 from mrs_nav.slam.grid import LogOddsGrid
@@ -20,7 +21,9 @@ from mrs_nav.slam.matcher import (
     POINT_SIGMA_CELLS,
     DistanceField,
     ScanMatcher,
+    _likelihoods,
 )
+from mrs_nav.slam.scan import BeamSplit, LaserScanData, split_beams
 
 RES = 0.05
 
@@ -44,9 +47,12 @@ def random_grid(rng: np.random.Generator) -> LogOddsGrid:
     return grid
 
 
+PAD = 8
+
+
 def field_of(grid: LogOddsGrid, rng: np.random.Generator) -> DistanceField:
     x0, y0 = rng.uniform(-2.5, -1.0, 2)
-    return DistanceField(grid, (x0, y0, x0 + rng.uniform(2.0, 4.0), y0 + rng.uniform(2.0, 3.5)), 0.5, 8)
+    return DistanceField(grid, (x0, y0, x0 + rng.uniform(2.0, 4.0), y0 + rng.uniform(2.0, 3.5)), 0.5, PAD)
 
 
 # --- numpy references -------------------------------------------------------------------------------------------
@@ -120,6 +126,53 @@ def reference_table_means(field, table, points, prior, *, angles, offsets, base)
     return table[cy[:, None, :, :], cx[:, :, None, :]].mean(axis=3)
 
 
+def reference_field_arrays(grid: LogOddsGrid, field: DistanceField, pad: int):
+    """Distance (m) and nearest-cell grid indices of ``field``'s window, padded as the field pads them."""
+    y0 = round((field.origin_y - grid.origin_y) / RES) + pad
+    x0 = round((field.origin_x - grid.origin_x) / RES) + pad
+    h, w = field.distance.shape[0] - 2 * pad, field.distance.shape[1] - 2 * pad
+    occ = grid.occupied()[y0 : y0 + h, x0 : x0 + w]
+    near = ndimage.distance_transform_edt(~occ, return_distances=False, return_indices=True)
+    rows, cols = np.indices(occ.shape)
+    dist = np.minimum(np.hypot(near[0] - rows, near[1] - cols) * RES, field.max_distance)
+    return (
+        np.pad(dist, pad, constant_values=field.max_distance),
+        np.pad(near[0] + y0, pad, constant_values=-1),
+        np.pad(near[1] + x0, pad, constant_values=-1),
+    )
+
+
+def reference_integrate(grid: LogOddsGrid, sensor: Pose2D, beams: BeamSplit) -> None:
+    res = grid.resolution
+    angles = np.concatenate([beams.hit_angles, beams.free_angles]) + sensor.yaw
+    ranges = np.concatenate([beams.hit_ranges, beams.free_ranges])
+    cos, sin = np.cos(angles), np.sin(angles)
+    ends_x, ends_y = sensor.x + ranges * cos, sensor.y + ranges * sin
+    step = 0.5 * res
+    n_hit = beams.hit_ranges.size
+    lengths = ranges.copy()
+    lengths[:n_hit] -= 0.5 * res
+    counts = np.maximum(np.ceil(lengths / step).astype(np.int64), 0)
+    beam = np.repeat(np.arange(ranges.size), counts)
+    t = (np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts)) * step
+    free_ix, free_iy = grid.cell_of(sensor.x + t * cos[beam], sensor.y + t * sin[beam])
+    occ_ix, occ_iy = grid.cell_of(ends_x[:n_hit], ends_y[:n_hit])
+    keep = (occ_ix >= 0) & (occ_ix < grid.width) & (occ_iy >= 0) & (occ_iy < grid.height)
+    occ_ix, occ_iy = occ_ix[keep], occ_iy[keep]
+    np.add.at(grid.hit_sum[0], (occ_iy, occ_ix), ends_x[:n_hit][keep] - (grid.origin_x + occ_ix * res))
+    np.add.at(grid.hit_sum[1], (occ_iy, occ_ix), ends_y[:n_hit][keep] - (grid.origin_y + occ_iy * res))
+    np.add.at(grid.hit_count, (occ_iy, occ_ix), 1.0)
+    keep = (free_ix >= 0) & (free_ix < grid.width) & (free_iy >= 0) & (free_iy < grid.height)
+    free = np.zeros(grid.logodds.shape, dtype=bool)
+    free[free_iy[keep], free_ix[keep]] = True
+    occ = np.zeros(grid.logodds.shape, dtype=bool)
+    occ[occ_iy, occ_ix] = True
+    free &= ~occ
+    grid.logodds[free] -= grid.lfree
+    grid.logodds[occ] += grid.loccupied
+    np.clip(grid.logodds, -grid.lmax, grid.lmax, out=grid.logodds)
+
+
 # --- the comparisons ---------------------------------------------------------------------------------------------
 
 
@@ -184,3 +237,54 @@ def test_search_scores_equal_the_numpy_reference(seed):
     ) - 0.05 * np.log1p(0.5 * z2)
     assert got.shape == (angles.size, offsets.size, offsets.size)
     np.testing.assert_allclose(got, want, rtol=0.0, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_distance_field_equals_the_numpy_reference(seed):
+    rng = np.random.default_rng(seed)
+    grid = random_grid(rng)
+    field = field_of(grid, rng)
+    distance, near_iy, near_ix = reference_field_arrays(grid, field, PAD)
+    between = (field.distance > 0.0) & (field.distance < field.max_distance)
+    assert field.distance.min() == 0.0  # the window holds walls
+    assert between.mean() > 0.1  # and open space near them
+    np.testing.assert_allclose(field.distance, distance, rtol=0.0, atol=1e-12)
+    np.testing.assert_array_equal(field.near_iy, near_iy)
+    np.testing.assert_array_equal(field.near_ix, near_ix)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_likelihood_tables_equal_the_numpy_reference(seed):
+    rng = np.random.default_rng(seed)
+    field = field_of(random_grid(rng), rng)
+    sigma, sigma_coarse = 0.05, 0.1
+    likelihood, pooled = _likelihoods(field.squared, field.distance_table, sigma, sigma_coarse, COARSE // 2)
+    np.testing.assert_allclose(likelihood, np.exp(-(field.distance**2) / (2.0 * sigma**2)), rtol=1e-14, atol=0.0)
+    wide = np.exp(-(field.distance**2) / (2.0 * sigma_coarse**2))
+    reference = ndimage.maximum_filter(wide, size=COARSE + 1, mode="nearest")
+    assert (reference > wide).mean() > 0.1  # the pooling changes many cells
+    np.testing.assert_allclose(pooled, reference, rtol=1e-14, atol=0.0)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_integrate_equals_the_numpy_reference(seed):
+    """Scans from random poses, some beams beyond the usable range, some leaving the fixed extent; the second
+    pass over the same scans drives cells into the clamp."""
+    rng = np.random.default_rng(seed)
+    grid = LogOddsGrid(RES, (-4.0, -3.0, 4.0, 3.0), grows=False, lmax=1.5)
+    reference = LogOddsGrid(RES, (-4.0, -3.0, 4.0, 3.0), grows=False, lmax=1.5)
+    scans = []
+    for _ in range(6):
+        ranges = rng.uniform(0.05, 6.0, 360)
+        ranges[rng.random(360) < 0.05] = np.nan
+        scan = LaserScanData(-math.pi, 2.0 * math.pi / 360, 0.1, 8.0, ranges)
+        sensor = Pose2D(*rng.uniform(-3.0, 3.0, 2), rng.uniform(-math.pi, math.pi))
+        scans.append((sensor, split_beams(scan, 4.0)))
+    for sensor, beams in scans + scans:
+        grid.integrate(sensor, beams)
+        reference_integrate(reference, sensor, beams)
+    assert (reference.logodds == -1.5).sum() > 100  # clamped free cells
+    assert (reference.hit_count > 1).sum() > 100  # cells hit more than once
+    np.testing.assert_array_equal(grid.logodds, reference.logodds)
+    np.testing.assert_array_equal(grid.hit_count, reference.hit_count)
+    np.testing.assert_array_equal(grid.hit_sum, reference.hit_sum)
