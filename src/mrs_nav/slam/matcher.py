@@ -21,7 +21,7 @@ the scan can reach, and into a likelihood field ``L = exp(-D^2 / (2 sigma^2))``.
 from __future__ import annotations
 
 import math
-from dataclasses import astuple, dataclass
+from dataclasses import dataclass
 
 import numba
 import numpy as np
@@ -139,6 +139,11 @@ def _clamp(index: npt.NDArray[np.int64], highest: int) -> npt.NDArray[np.int64]:
     return np.minimum(np.maximum(index, 0, out=index), highest, out=index)
 
 
+def _floats(pose: Pose2D) -> tuple[float, float, float]:
+    """A pose as the kernels take it (a pose of ints, say, would match no kernel signature)."""
+    return float(pose.x), float(pose.y), float(pose.yaw)
+
+
 def thin_points(points: FloatArray, spacing: float) -> FloatArray:
     """One point per ``spacing``-sized cell (laser frame): the mean of the points in it, so dense near returns
     do not dominate.
@@ -178,6 +183,7 @@ class ScanMatcher:
         """
         if field.empty or points.shape[0] < 3:
             return MatchResult(prior, 0.0, 0.0)
+        points = np.ascontiguousarray(points, dtype=np.float64)
         # The coarse level also uses a wider likelihood: its 1-degree heading steps move far points by more
         # than a cell, and a too-sharp score would rank the right block below a lucky wrong one.
         sigma_c = max(self.sigma, 0.5 * COARSE * field.resolution)
@@ -230,17 +236,10 @@ class ScanMatcher:
         spread: tuple[float, float] = (1.0, 1.0),
     ) -> FloatArray:
         """Mean table value minus the prior penalty, for every (angle, x offset, y offset) in cells."""
-        res = field.resolution
-        position = (prior.x + base[0] * res, prior.y + base[1] * res)
-        score = _table_means(
-            table, (field.origin_x, field.origin_y), res, points, position, prior.yaw + angles, offsets
-        )
-        ox = (base[0] + offsets) * res / spread[0]
-        oy = (base[1] + offsets) * res / spread[0]
-        oa = angles / spread[1]
-        z2 = oa[:, None, None] ** 2 + ox[None, :, None] ** 2 + oy[None, None, :] ** 2
-        penalty = PRIOR_WEIGHT * np.log1p(0.5 * z2)
-        return np.asarray(score - penalty, dtype=np.float64)
+        window = (field.origin_x, field.origin_y, field.resolution)
+        floats = (float(spread[0]), float(spread[1]))
+        scores: FloatArray = _search_scores(table, window, points, _floats(prior), angles, offsets, base, floats)
+        return scores
 
     def refine(
         self,
@@ -257,8 +256,9 @@ class ScanMatcher:
         A maximum a posteriori Gauss-Newton: point residuals with standard deviation ``POINT_SIGMA_CELLS``
         (at most ``INDEPENDENT_POINTS`` counted as independent) plus the odometry prior ``prior`` / ``spread``.
         """
-        prior_info = np.array([spread[0] ** -2, spread[0] ** -2, spread[1] ** -2])
-        x, y, yaw = _refine(points, astuple(start), astuple(prior), prior_info, iterations, field.kernel_args())
+        prior_info = np.array([spread[0] ** -2, spread[0] ** -2, spread[1] ** -2], dtype=np.float64)
+        points = np.ascontiguousarray(points, dtype=np.float64)
+        x, y, yaw = _refine(points, _floats(start), _floats(prior), prior_info, iterations, field.kernel_args())
         return Pose2D(x, y, wrap_angle(yaw))
 
     def _evaluate(self, field: DistanceField, likelihood: FloatArray, points: FloatArray, pose: Pose2D) -> MatchResult:
@@ -417,32 +417,35 @@ def _refine(  # noqa: PLR0917 - numba kernels take positional arguments
 
 
 @numba.njit(  # type: ignore[misc]
-    "float64[:, :, ::1](float64[:, ::1], UniTuple(float64, 2), float64, float64[:, ::1], UniTuple(float64, 2), "
-    "float64[::1], int64[::1])",
+    "float64[:, :, ::1](float64[:, ::1], UniTuple(float64, 3), float64[:, ::1], UniTuple(float64, 3), float64[::1], "
+    "int64[::1], UniTuple(int64, 2), UniTuple(float64, 2))",
     cache=True,
 )
-def _table_means(  # noqa: PLR0917 - numba kernels take positional arguments
+def _search_scores(  # noqa: PLR0917 - numba kernels take positional arguments
     table: FloatArray,
-    origin: tuple[float, float],
-    res: float,
+    window: tuple[float, float, float],
     points: FloatArray,
-    position: tuple[float, float],
-    yaws: FloatArray,
+    prior: tuple[float, float, float],
+    angles: FloatArray,
     offsets: IntArray,
+    base: tuple[int, int],
+    spread: tuple[float, float],
 ) -> FloatArray:
-    """Mean ``table`` value (a window with its corner at ``origin``, m) under ``points`` (laser frame) placed at
-    ``position`` (m), each heading of ``yaws`` and every (x, y) cell offset of ``offsets``: an (angles,
-    x offsets, y offsets) array. Cell indices are clipped into the table."""
-    x, y = position
-    origin_x, origin_y = origin
+    """ScanMatcher._scores: for every heading ``prior`` yaw + ``angles`` (rad) and every (x, y) cell offset
+    ``base`` + ``offsets``, the mean ``table`` value (a window: corner x, y and resolution, m) under ``points``
+    (laser frame) placed there, cell indices clipped into the table, minus the odometry prior's penalty with
+    standard deviations ``spread`` (m, rad): an (angles, x offsets, y offsets) array."""
+    origin_x, origin_y, res = window
+    x, y = prior[0] + base[0] * res, prior[1] + base[1] * res
     height, width = table.shape
     n = points.shape[0]
     k = offsets.size
-    out = np.empty((yaws.size, k, k))
+    out = np.empty((angles.size, k, k))
     ix = np.empty(n, dtype=np.int64)
     iy = np.empty(n, dtype=np.int64)
-    for a in range(yaws.size):
-        c, s = math.cos(yaws[a]), math.sin(yaws[a])
+    for a in range(angles.size):
+        yaw = prior[2] + angles[a]
+        c, s = math.cos(yaw), math.sin(yaw)
         for p in range(n):
             px, py = points[p, 0], points[p, 1]
             ix[p] = min(max(math.floor((x + c * px - s * py - origin_x) / res), 0), width - 1)
@@ -454,7 +457,9 @@ def _table_means(  # noqa: PLR0917 - numba kernels take positional arguments
                     row = min(max(iy[p] + offsets[ky], 0), height - 1)
                     col = min(max(ix[p] + offsets[kx], 0), width - 1)
                     total += table[row, col]
-                out[a, kx, ky] = total / n
+                z2 = (angles[a] / spread[1]) ** 2 + ((base[0] + offsets[kx]) * res / spread[0]) ** 2
+                z2 += ((base[1] + offsets[ky]) * res / spread[0]) ** 2
+                out[a, kx, ky] = total / n - PRIOR_WEIGHT * math.log1p(0.5 * z2)
     return out
 
 
@@ -491,25 +496,22 @@ def _likelihoods(
     fine_table = np.exp(-(distance_table**2) / (2.0 * sigma**2))
     wide_table = np.exp(-(distance_table**2) / (2.0 * sigma_coarse**2))
     height, width = squared.shape
-    likelihood = np.empty((height, width))
-    wide = np.empty((height, width))
+    # The likelihood falls as the squared distance grows: the block maximum of the likelihood is the
+    # likelihood of the block minimum of the squared distance, pooled (separably, columns then rows) on ints.
+    across = np.empty((height, width), dtype=np.int32)
     for row in range(height):
         for col in range(width):
-            likelihood[row, col] = fine_table[squared[row, col]]
-            wide[row, col] = wide_table[squared[row, col]]
-    # Separable: the maximum over columns, then over rows.
-    across = np.empty((height, width))
-    for row in range(height):
-        for col in range(width):
-            best = wide[row, max(col - half, 0)]
+            nearest = squared[row, max(col - half, 0)]
             for c in range(max(col - half, 0) + 1, min(col + half, width - 1) + 1):
-                best = max(best, wide[row, c])
-            across[row, col] = best
+                nearest = min(nearest, squared[row, c])
+            across[row, col] = nearest
+    likelihood = np.empty((height, width))
     pooled = np.empty((height, width))
     for row in range(height):
         for col in range(width):
-            best = across[max(row - half, 0), col]
+            nearest = across[max(row - half, 0), col]
             for r in range(max(row - half, 0) + 1, min(row + half, height - 1) + 1):
-                best = max(best, across[r, col])
-            pooled[row, col] = best
+                nearest = min(nearest, across[r, col])
+            likelihood[row, col] = fine_table[squared[row, col]]
+            pooled[row, col] = wide_table[nearest]
     return likelihood, pooled

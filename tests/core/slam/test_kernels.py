@@ -19,6 +19,7 @@ from mrs_nav.slam.matcher import (
     INDEPENDENT_POINTS,
     NORMAL_RADIUS,
     POINT_SIGMA_CELLS,
+    PRIOR_WEIGHT,
     DistanceField,
     ScanMatcher,
     _likelihoods,
@@ -226,15 +227,14 @@ def test_search_scores_equal_the_numpy_reference(seed):
     angles = np.arange(-7, 8) * math.radians(1.0)
     offsets = np.arange(-2, 3) * COARSE
     base = (int(rng.integers(-8, 9)), int(rng.integers(-8, 9)))
-    spread = (1.0, 1.0)  # no prior penalty difference: _scores' penalty is plain numpy either way
+    spread = (rng.uniform(0.02, 0.3), rng.uniform(0.01, 0.2))
     matcher = ScanMatcher(0.05, 0.3, 0.5)
     got = matcher._scores(field, table, points, prior, angles=angles, offsets=offsets, base=base, spread=spread)
-    ox = (base[0] + offsets) * RES
-    oy = (base[1] + offsets) * RES
-    z2 = angles[:, None, None] ** 2 + ox[None, :, None] ** 2 + oy[None, None, :] ** 2
-    want = reference_table_means(
-        field, table, points, prior, angles=angles, offsets=offsets, base=base
-    ) - 0.05 * np.log1p(0.5 * z2)
+    ox = (base[0] + offsets) * RES / spread[0]
+    oy = (base[1] + offsets) * RES / spread[0]
+    z2 = (angles[:, None, None] / spread[1]) ** 2 + ox[None, :, None] ** 2 + oy[None, None, :] ** 2
+    penalty = PRIOR_WEIGHT * np.log1p(0.5 * z2)
+    want = reference_table_means(field, table, points, prior, angles=angles, offsets=offsets, base=base) - penalty
     assert got.shape == (angles.size, offsets.size, offsets.size)
     np.testing.assert_allclose(got, want, rtol=0.0, atol=1e-12)
 
