@@ -29,7 +29,7 @@ import numpy.typing as npt
 from scipy import ndimage
 
 from mrs_nav.geometry import FloatArray, Pose2D, wrap_angle
-from mrs_nav.slam.grid import GRID_ARRAYS_TYPE, GridArrays, LogOddsGrid
+from mrs_nav.slam.grid import GRID_ARRAYS_TYPE, GridArrays, IntArray, LogOddsGrid
 
 COARSE = 4  # cells per coarse translation step
 COARSE_ANGLE = math.radians(1.0)
@@ -40,7 +40,6 @@ NORMAL_RADIUS = 2  # cells: the neighbourhood whose hits define a surface normal
 POINT_SIGMA_CELLS = 0.5  # assumed standard deviation of a point-to-hit residual, in cells
 INDEPENDENT_POINTS = 20.0  # neighbouring scan points are correlated; count at most this many as independent
 
-IntArray = npt.NDArray[np.int64]
 CellArray = npt.NDArray[np.int32]  # grid indices as the distance transform gives them
 # What the compiled surface lookup needs of a field (DistanceField.kernel_args): the window's origin (m), the
 # nearest occupied cell's grid indices per window cell, and the grid.
@@ -109,13 +108,6 @@ class DistanceField:
         """The field and its grid as the compiled surface lookup (:func:`_surface`) takes them."""
         return self.origin_x, self.origin_y, self.near_iy, self.near_ix, self.grid.kernel_args()
 
-    def cells(self, x: FloatArray, y: FloatArray) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
-        """Cell indices of points, clipped into the padded window."""
-        h, w = self.distance.shape
-        ix = _clamp(np.floor((x - self.origin_x) / self.resolution).astype(np.int64), w - 1)
-        iy = _clamp(np.floor((y - self.origin_y) / self.resolution).astype(np.int64), h - 1)
-        return ix, iy
-
     def interpolate(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Bilinear ``D`` at points and its gradient ``(dD/dx, dD/dy)`` (unitless)."""
         h, w = self.distance.shape
@@ -131,12 +123,6 @@ class DistanceField:
         gx = ((1 - fv) * (d01 - d00) + fv * (d11 - d10)) / self.resolution
         gy = ((1 - fu) * (d10 - d00) + fu * (d11 - d01)) / self.resolution
         return value, gx, gy
-
-
-def _clamp(index: npt.NDArray[np.int64], highest: int) -> npt.NDArray[np.int64]:
-    """``index`` clipped to ``0..highest`` in place; np.clip's argument checks cost more than the clipping on
-    the matcher's many small arrays."""
-    return np.minimum(np.maximum(index, 0, out=index), highest, out=index)
 
 
 def _floats(pose: Pose2D) -> tuple[float, float, float]:

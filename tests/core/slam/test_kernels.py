@@ -56,12 +56,19 @@ def field_of(grid: LogOddsGrid, rng: np.random.Generator) -> DistanceField:
     return DistanceField(grid, (x0, y0, x0 + rng.uniform(2.0, 4.0), y0 + rng.uniform(2.0, 3.5)), 0.5, PAD)
 
 
+def cells(field: DistanceField, x: np.ndarray, y: np.ndarray):
+    h, w = field.distance.shape
+    ix = np.clip(np.floor((x - field.origin_x) / field.resolution).astype(np.int64), 0, w - 1)
+    iy = np.clip(np.floor((y - field.origin_y) / field.resolution).astype(np.int64), 0, h - 1)
+    return ix, iy
+
+
 # --- numpy references -------------------------------------------------------------------------------------------
 
 
 def reference_nearest_surface(field: DistanceField, x: np.ndarray, y: np.ndarray):
     grid = field.grid
-    ix, iy = field.cells(x, y)
+    ix, iy = cells(field, x, y)
     niy, nix = field.near_iy[iy, ix], field.near_ix[iy, ix]
     inside = niy >= 0
     niy, nix = np.maximum(niy, 0), np.maximum(nix, 0)
@@ -120,7 +127,7 @@ def reference_table_means(field, table, points, prior, *, angles, offsets, base)
     c, s = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
     wx = prior.x + c * points[:, 0] - s * points[:, 1] + base[0] * res
     wy = prior.y + s * points[:, 0] + c * points[:, 1] + base[1] * res
-    ix, iy = field.cells(wx, wy)
+    ix, iy = cells(field, wx, wy)
     h, w = table.shape
     cx = np.clip(ix[:, None, :] + offsets[None, :, None], 0, w - 1)
     cy = np.clip(iy[:, None, :] + offsets[None, :, None], 0, h - 1)
