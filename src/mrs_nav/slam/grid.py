@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 import numpy.typing as npt
 
@@ -28,6 +29,10 @@ from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.slam.scan import BeamSplit
 
 IntArray = npt.NDArray[np.int64]
+# A grid as compiled kernels take it (LogOddsGrid.kernel_args): log-odds, hit offset sums, hit counts, origin x,
+# origin y and resolution (m); and that as a numba type.
+GridArrays = tuple[npt.NDArray[np.float32], npt.NDArray[np.float32], npt.NDArray[np.float32], float, float, float]
+GRID_ARRAYS_TYPE = "Tuple((float32[:, ::1], float32[:, :, ::1], float32[:, ::1], float64, float64, float64))"
 
 # map_server's default occupied_thresh 0.65 as log-odds; a cell more likely free than occupied is free.
 OCCUPIED_LOGODDS = math.log(0.65 / 0.35)
@@ -119,7 +124,6 @@ class LogOddsGrid:
 
     def integrate(self, sensor: Pose2D, beams: BeamSplit) -> None:
         """Update the grid with one scan taken from ``sensor`` (laser pose in the map frame)."""
-        res = self.resolution
         angles = np.concatenate([beams.hit_angles, beams.free_angles]) + sensor.yaw
         ranges = np.concatenate([beams.hit_ranges, beams.free_ranges])
         if ranges.size == 0:
@@ -133,47 +137,9 @@ class LogOddsGrid:
             max(sensor.x, float(ends_x.max())),
             max(sensor.y, float(ends_y.max())),
         )
-        # Sample every beam at half a cell up to half a cell before its end, so no crossed cell is skipped on
-        # axis-aligned beams and the end cell is left to the occupied update.
-        step = 0.5 * res
-        n_hit = beams.hit_ranges.size
-        lengths = ranges.copy()
-        lengths[:n_hit] -= 0.5 * res
-        counts = np.maximum(np.ceil(lengths / step).astype(np.int64), 0)
-        total = int(counts.sum())
-        beam = np.repeat(np.arange(ranges.size), counts)
-        k = np.arange(total) - np.repeat(np.cumsum(counts) - counts, counts)
-        t = k * step
-        free_ix, free_iy = self.cell_of(sensor.x + t * cos[beam], sensor.y + t * sin[beam])
-        occ_ix, occ_iy = self.cell_of(ends_x[:n_hit], ends_y[:n_hit])
-        keep = (occ_ix >= 0) & (occ_ix < self.width) & (occ_iy >= 0) & (occ_iy < self.height)
-        occ_ix, occ_iy = occ_ix[keep], occ_iy[keep]
-        corner_x = self.origin_x + occ_ix * res
-        corner_y = self.origin_y + occ_iy * res
-        np.add.at(self.hit_sum[0], (occ_iy, occ_ix), ends_x[:n_hit][keep] - corner_x)
-        np.add.at(self.hit_sum[1], (occ_iy, occ_ix), ends_y[:n_hit][keep] - corner_y)
-        np.add.at(self.hit_count, (occ_iy, occ_ix), 1.0)
-        self._apply(free_ix, free_iy, occ_ix, occ_iy)
-
-    def _apply(self, free_ix: IntArray, free_iy: IntArray, occ_ix: IntArray, occ_iy: IntArray) -> None:
-        keep = (free_ix >= 0) & (free_ix < self.width) & (free_iy >= 0) & (free_iy < self.height)
-        free_ix, free_iy = free_ix[keep], free_iy[keep]
-        all_x = np.concatenate([free_ix, occ_ix])
-        all_y = np.concatenate([free_iy, occ_iy])
-        if all_x.size == 0:
-            return
-        # Work in the scan's bounding window so marking cells costs O(window), not O(map).
-        x0, x1 = int(all_x.min()), int(all_x.max()) + 1
-        y0, y1 = int(all_y.min()), int(all_y.max()) + 1
-        window = self.logodds[y0:y1, x0:x1]
-        free = np.zeros(window.shape, dtype=bool)
-        free[free_iy - y0, free_ix - x0] = True
-        occ = np.zeros(window.shape, dtype=bool)
-        occ[occ_iy - y0, occ_ix - x0] = True
-        free &= ~occ
-        window[free] -= self.lfree
-        window[occ] += self.loccupied
-        np.clip(window, -self.lmax, self.lmax, out=window)
+        # float32 like the log-odds, so that the updates round as the grid's own arithmetic does
+        update = np.array([self.lfree, self.loccupied, self.lmax], dtype=np.float32)
+        _integrate(self.kernel_args(), (sensor.x, sensor.y), cos, sin, ranges, beams.hit_ranges.size, update)
 
     def mean_hits(self, iy: IntArray, ix: IntArray) -> tuple[FloatArray, FloatArray]:
         """Mean end point (m) of cells ``(iy, ix)``; the cell centre where nothing was hit."""
@@ -183,6 +149,10 @@ class LogOddsGrid:
         dx = np.where(count > 0, self.hit_sum[0, iy, ix] / safe, 0.5 * res)
         dy = np.where(count > 0, self.hit_sum[1, iy, ix] / safe, 0.5 * res)
         return self.origin_x + ix * res + dx, self.origin_y + iy * res + dy
+
+    def kernel_args(self) -> GridArrays:
+        """The grid's arrays and geometry, for compiled kernels (they see the arrays, not copies)."""
+        return self.logodds, self.hit_sum, self.hit_count, self.origin_x, self.origin_y, self.resolution
 
     def occupied(self) -> npt.NDArray[np.bool_]:
         """Cells that are more likely occupied than free (what the scan matcher aligns to)."""
@@ -194,3 +164,72 @@ class LogOddsGrid:
         out[self.logodds >= OCCUPIED_LOGODDS] = 100
         out[self.logodds < FREE_LOGODDS] = 0
         return out
+
+
+_FREE, _HIT = 1, 2  # what one scan says of a cell
+
+
+@numba.njit(  # type: ignore[misc]
+    "void("
+    + GRID_ARRAYS_TYPE
+    + ", UniTuple(float64, 2), float64[::1], float64[::1], float64[::1], int64, float32[::1])",
+    cache=True,
+)
+def _integrate(  # noqa: PLR0917 - numba kernels take positional arguments
+    grid: GridArrays,
+    sensor: tuple[float, float],
+    cos: FloatArray,
+    sin: FloatArray,
+    ranges: FloatArray,
+    n_hit: int,
+    update: npt.NDArray[np.float32],
+) -> None:
+    """LogOddsGrid.integrate's ray casting: beams from ``sensor`` (m) in directions ``(cos, sin)`` of length
+    ``ranges`` (m), the first ``n_hit`` ending on an obstacle; ``update``: lfree, loccupied, lmax."""
+    logodds, hit_sum, hit_count, origin_x, origin_y, res = grid
+    height, width = logodds.shape
+    sx, sy = sensor
+    lfree, loccupied, lmax = update[0], update[1], update[2]
+    # Every sample lies between the sensor and a beam's end: their bounding box, clipped to the grid, holds
+    # all the cells this scan marks, so marking costs O(that window), not O(map).
+    x_lo = x_hi = math.floor((sx - origin_x) / res)
+    y_lo = y_hi = math.floor((sy - origin_y) / res)
+    for b in range(ranges.size):
+        ix = math.floor((sx + ranges[b] * cos[b] - origin_x) / res)
+        iy = math.floor((sy + ranges[b] * sin[b] - origin_y) / res)
+        x_lo, x_hi, y_lo, y_hi = min(x_lo, ix), max(x_hi, ix), min(y_lo, iy), max(y_hi, iy)
+    x_lo, y_lo = max(x_lo, 0), max(y_lo, 0)
+    x_hi, y_hi = min(x_hi, width - 1), min(y_hi, height - 1)
+    if x_hi < x_lo or y_hi < y_lo:
+        return
+    mark = np.zeros((y_hi - y_lo + 1, x_hi - x_lo + 1), dtype=np.uint8)
+    # End points: the mean hit sums, and marked occupied (a cell holding one is never cleared by this scan).
+    for b in range(n_hit):
+        ex = sx + ranges[b] * cos[b]
+        ey = sy + ranges[b] * sin[b]
+        ix = math.floor((ex - origin_x) / res)
+        iy = math.floor((ey - origin_y) / res)
+        if 0 <= ix < width and 0 <= iy < height:
+            hit_sum[0, iy, ix] += ex - (origin_x + ix * res)
+            hit_sum[1, iy, ix] += ey - (origin_y + iy * res)
+            hit_count[iy, ix] += 1.0
+            mark[iy - y_lo, ix - x_lo] = _HIT
+    # Every beam sampled at half a cell up to half a cell before its end, so no crossed cell is skipped on
+    # axis-aligned beams and the end cell is left to the occupied update.
+    step = 0.5 * res
+    for b in range(ranges.size):
+        length = ranges[b] - 0.5 * res if b < n_hit else ranges[b]
+        for k in range(max(math.ceil(length / step), 0)):
+            t = k * step
+            ix = math.floor((sx + t * cos[b] - origin_x) / res)
+            iy = math.floor((sy + t * sin[b] - origin_y) / res)
+            if 0 <= ix < width and 0 <= iy < height and mark[iy - y_lo, ix - x_lo] == 0:
+                mark[iy - y_lo, ix - x_lo] = _FREE
+    # Each marked cell updated once, however many beams crossed it.
+    for row in range(mark.shape[0]):
+        for col in range(mark.shape[1]):
+            if mark[row, col] == 0:
+                continue
+            cell = logodds[y_lo + row, x_lo + col]
+            cell = cell - lfree if mark[row, col] == _FREE else cell + loccupied
+            logodds[y_lo + row, x_lo + col] = min(max(cell, -lmax), lmax)

@@ -23,12 +23,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 import numpy.typing as npt
 from scipy import ndimage
 
 from mrs_nav.geometry import FloatArray, Pose2D, wrap_angle
-from mrs_nav.slam.grid import LogOddsGrid
+from mrs_nav.slam.grid import GRID_ARRAYS_TYPE, GridArrays, IntArray, LogOddsGrid
 
 COARSE = 4  # cells per coarse translation step
 COARSE_ANGLE = math.radians(1.0)
@@ -38,6 +39,11 @@ PRIOR_WEIGHT = 0.05  # score units (mean likelihood, 0..1) per squared prior sta
 NORMAL_RADIUS = 2  # cells: the neighbourhood whose hits define a surface normal
 POINT_SIGMA_CELLS = 0.5  # assumed standard deviation of a point-to-hit residual, in cells
 INDEPENDENT_POINTS = 20.0  # neighbouring scan points are correlated; count at most this many as independent
+
+CellArray = npt.NDArray[np.int32]  # grid indices as the distance transform gives them
+# What the compiled surface lookup needs of a field (DistanceField.kernel_args): the window's origin (m), the
+# nearest occupied cell's grid indices per window cell, and the grid.
+SurfaceArgs = tuple[float, float, CellArray, CellArray, GridArrays]
 
 
 @dataclass(frozen=True)
@@ -64,84 +70,43 @@ class DistanceField:
         y1 = min(grid.height, math.ceil((bounds[3] - grid.origin_y) / res) + 1)
         self.resolution = res
         self.max_distance = max_distance
-        occ = grid.occupied()[y0:y1, x0:x1] if x1 > x0 and y1 > y0 else np.zeros((0, 0), dtype=bool)
+        # The window only: the whole map's occupied() would cost O(map) per scan.
+        occ = grid.logodds[y0:y1, x0:x1] > 0.0 if x1 > x0 and y1 > y0 else np.zeros((0, 0), dtype=bool)
         self.empty = not bool(occ.any())
-        if self.empty:
-            dist = np.full((1, 1), max_distance, dtype=np.float64)
-            near = np.zeros((2, 1, 1), dtype=np.int64)
-        else:
-            # The nearest occupied cells give the distances too: the transform need not compute them twice.
-            near = ndimage.distance_transform_edt(~occ, return_distances=False, return_indices=True)
-            rows, cols = np.indices(occ.shape)
-            dist = np.minimum(np.hypot(near[0] - rows, near[1] - cols) * res, max_distance)
-        self.distance: FloatArray = np.pad(dist, pad, constant_values=max_distance)
         self.origin_x = grid.origin_x + (x0 - pad) * res
         self.origin_y = grid.origin_y + (y0 - pad) * res
-        # Grid indices of the nearest occupied cell, per window cell (-1 in the padding).
         self.grid = grid
-        self.near_iy = np.pad(near[0] + y0, pad, constant_values=-1)
-        self.near_ix = np.pad(near[1] + x0, pad, constant_values=-1)
-        # Surface normals computed so far (nearest_surface): grid flat index -> angle, sorted by index.
-        self._normal_keys = np.zeros(0, dtype=np.int64)
-        self._normals = np.zeros(0, dtype=np.float64)
+        # Squared distance in cells to the nearest occupied cell, capped where the distance reaches the
+        # truncation: distances, and the matcher's likelihoods, take only these few values, so they are
+        # computed once per value (distance_table) and looked up per cell.
+        cap = math.ceil((max_distance / res) ** 2) + 1
+        self.distance_table: FloatArray = np.minimum(np.sqrt(np.arange(cap + 1)) * res, max_distance)
+        self.squared: CellArray
+        # Grid indices of the nearest occupied cell, per window cell (-1 in the padding).
+        self.near_iy: CellArray
+        self.near_ix: CellArray
+        if self.empty:
+            shape = (1 + 2 * pad, 1 + 2 * pad)
+            self.squared = np.full(shape, cap, dtype=np.int32)
+            self.near_iy = self.near_ix = np.full(shape, -1, dtype=np.int32)
+        else:
+            near = ndimage.distance_transform_edt(~occ, return_distances=False, return_indices=True)
+            self.squared, self.near_iy, self.near_ix = _padded_field(near, pad, y0, x0, cap)
+        self.distance: FloatArray = self.distance_table[self.squared]
 
     def nearest_surface(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """For each point: the mean hit point ``(mx, my)`` (m) of the nearest occupied cell and the angle (rad)
         of the surface normal there, from the principal axes of the mean hits of the occupied cells within
         ``NORMAL_RADIUS`` cells. NaN outside the window or where fewer than 3 hits define no line."""
-        ix, iy = self.cells(x, y)
-        niy, nix = self.near_iy[iy, ix], self.near_ix[iy, ix]
-        inside = niy >= 0
-        niy, nix = np.maximum(niy, 0), np.maximum(nix, 0)
-        hx, hy = self.grid.mean_hits(niy, nix)
-        # A cell's normal depends on the grid only, which does not change while the field is in use, and the
-        # refinement's iterations ask for much the same cells: each is computed once.
-        key = niy * self.grid.width + nix
-        at, known = self._cached(key)
-        new = np.unique(key[inside & ~known])
-        if new.size:
-            self._normal_keys = np.concatenate([self._normal_keys, new])
-            normals = self._normals_at(new // self.grid.width, new % self.grid.width)
-            self._normals = np.concatenate([self._normals, normals])
-            order = np.argsort(self._normal_keys)
-            self._normal_keys, self._normals = self._normal_keys[order], self._normals[order]
-            at, _ = self._cached(key)
-        normal = self._normals[at] if self._normals.size else np.full(x.shape, np.nan)
-        good = inside & np.isfinite(normal)
-        nan = np.full(x.shape, np.nan)
-        return np.where(good, hx, nan), np.where(good, hy, nan), np.where(good, normal, nan)
+        shape = np.shape(x)
+        wx = np.ascontiguousarray(x, dtype=np.float64).ravel()
+        wy = np.ascontiguousarray(y, dtype=np.float64).ravel()
+        out: FloatArray = _nearest_surfaces(wx, wy, self.kernel_args())
+        return out[0].reshape(shape), out[1].reshape(shape), out[2].reshape(shape)
 
-    def _cached(self, key: npt.NDArray[np.int64]) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.bool_]]:
-        """Where each grid flat index ``key`` is (or would go) among the cached normals, and whether it is there."""
-        at = _clamp(np.searchsorted(self._normal_keys, key), max(self._normal_keys.size - 1, 0))
-        known = self._normal_keys[at] == key if self._normal_keys.size else np.zeros(key.shape, dtype=bool)
-        return at, known
-
-    def _normals_at(self, niy: npt.NDArray[np.int64], nix: npt.NDArray[np.int64]) -> FloatArray:
-        """Surface normal angle (rad) at grid cells ``(niy, nix)``; NaN where fewer than 3 hits are near."""
-        offsets = np.arange(-NORMAL_RADIUS, NORMAL_RADIUS + 1)
-        oy, ox = (a.ravel() for a in np.meshgrid(offsets, offsets, indexing="ij"))
-        gy = np.clip(niy[:, None] + oy[None, :], 0, self.grid.height - 1)
-        gx = np.clip(nix[:, None] + ox[None, :], 0, self.grid.width - 1)
-        occupied = (self.grid.logodds[gy, gx] > 0.0) & (self.grid.hit_count[gy, gx] > 0)
-        px, py = self.grid.mean_hits(gy, gx)
-        w = occupied.astype(np.float64)
-        count = w.sum(axis=1)
-        safe = np.maximum(count, 1.0)
-        cx = (w * px).sum(axis=1) / safe
-        cy = (w * py).sum(axis=1) / safe
-        dx, dy = px - cx[:, None], py - cy[:, None]
-        sxx, syy, sxy = (w * dx * dx).sum(axis=1), (w * dy * dy).sum(axis=1), (w * dx * dy).sum(axis=1)
-        # Principal (tangent) direction of the local hits; the normal is perpendicular to it.
-        normal = 0.5 * np.arctan2(2.0 * sxy, sxx - syy) + 0.5 * np.pi
-        return np.where(count >= 3, normal, np.nan)
-
-    def cells(self, x: FloatArray, y: FloatArray) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
-        """Cell indices of points, clipped into the padded window."""
-        h, w = self.distance.shape
-        ix = _clamp(np.floor((x - self.origin_x) / self.resolution).astype(np.int64), w - 1)
-        iy = _clamp(np.floor((y - self.origin_y) / self.resolution).astype(np.int64), h - 1)
-        return ix, iy
+    def kernel_args(self) -> SurfaceArgs:
+        """The field and its grid as the compiled surface lookup (:func:`_surface`) takes them."""
+        return self.origin_x, self.origin_y, self.near_iy, self.near_ix, self.grid.kernel_args()
 
     def interpolate(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Bilinear ``D`` at points and its gradient ``(dD/dx, dD/dy)`` (unitless)."""
@@ -160,10 +125,9 @@ class DistanceField:
         return value, gx, gy
 
 
-def _clamp(index: npt.NDArray[np.int64], highest: int) -> npt.NDArray[np.int64]:
-    """``index`` clipped to ``0..highest`` in place; np.clip's argument checks cost more than the clipping on
-    the matcher's many small arrays."""
-    return np.minimum(np.maximum(index, 0, out=index), highest, out=index)
+def _floats(pose: Pose2D) -> tuple[float, float, float]:
+    """A pose as the kernels take it (a pose of ints, say, would match no kernel signature)."""
+    return float(pose.x), float(pose.y), float(pose.yaw)
 
 
 def thin_points(points: FloatArray, spacing: float) -> FloatArray:
@@ -205,12 +169,11 @@ class ScanMatcher:
         """
         if field.empty or points.shape[0] < 3:
             return MatchResult(prior, 0.0, 0.0)
-        likelihood = np.exp(-(field.distance**2) / (2.0 * self.sigma**2))
+        points = np.ascontiguousarray(points, dtype=np.float64)
         # The coarse level also uses a wider likelihood: its 1-degree heading steps move far points by more
         # than a cell, and a too-sharp score would rank the right block below a lucky wrong one.
         sigma_c = max(self.sigma, 0.5 * COARSE * field.resolution)
-        wide = np.exp(-(field.distance**2) / (2.0 * sigma_c**2))
-        pooled = ndimage.maximum_filter(wide, size=COARSE + 1, mode="nearest")
+        likelihood, pooled = _likelihoods(field.squared, field.distance_table, self.sigma, sigma_c, COARSE // 2)
         res = field.resolution
         n_lin = max(1, math.ceil(self.search_linear / (COARSE * res)))
         n_ang = max(1, math.ceil(self.search_angular / COARSE_ANGLE))
@@ -259,24 +222,10 @@ class ScanMatcher:
         spread: tuple[float, float] = (1.0, 1.0),
     ) -> FloatArray:
         """Mean table value minus the prior penalty, for every (angle, x offset, y offset) in cells."""
-        res = field.resolution
-        yaw = prior.yaw + angles
-        c, s = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
-        wx = prior.x + c * points[:, 0] - s * points[:, 1] + base[0] * res
-        wy = prior.y + s * points[:, 0] + c * points[:, 1] + base[1] * res
-        ix, iy = field.cells(wx, wy)  # (A, N)
-        h, w = table.shape
-        # Offsets within the padding never leave the padded table; clip anyway for very far points.
-        cx = _clamp(ix[:, None, :] + offsets[None, :, None], w - 1)  # (A, K, N)
-        cy = _clamp(iy[:, None, :] + offsets[None, :, None], h - 1)
-        flat = cy[:, None, :, :] * w + cx[:, :, None, :]  # (A, Kx, Ky, N)
-        score = table.ravel()[flat].mean(axis=3)
-        ox = (base[0] + offsets) * res / spread[0]
-        oy = (base[1] + offsets) * res / spread[0]
-        oa = angles / spread[1]
-        z2 = oa[:, None, None] ** 2 + ox[None, :, None] ** 2 + oy[None, None, :] ** 2
-        penalty = PRIOR_WEIGHT * np.log1p(0.5 * z2)
-        return np.asarray(score - penalty, dtype=np.float64)
+        window = (field.origin_x, field.origin_y, field.resolution)
+        floats = (float(spread[0]), float(spread[1]))
+        scores: FloatArray = _search_scores(table, window, points, _floats(prior), angles, offsets, base, floats)
+        return scores
 
     def refine(
         self,
@@ -293,35 +242,9 @@ class ScanMatcher:
         A maximum a posteriori Gauss-Newton: point residuals with standard deviation ``POINT_SIGMA_CELLS``
         (at most ``INDEPENDENT_POINTS`` counted as independent) plus the odometry prior ``prior`` / ``spread``.
         """
-        prior_info = np.array([spread[0] ** -2, spread[0] ** -2, spread[1] ** -2])
-        res = field.resolution
-        x, y, yaw = start.x, start.y, start.yaw
-        cutoff = 4.0 * res
-        huber = 0.5 * res
-        for _ in range(iterations):
-            c, s = math.cos(yaw), math.sin(yaw)
-            wx = x + c * points[:, 0] - s * points[:, 1]
-            wy = y + s * points[:, 0] + c * points[:, 1]
-            mx, my, normal = field.nearest_surface(wx, wy)
-            use = np.isfinite(normal) & (np.hypot(wx - mx, wy - my) < cutoff)
-            if int(use.sum()) < 3:
-                break
-            nx, ny = np.cos(normal[use]), np.sin(normal[use])
-            # residual r = n . (R p + t - m); dr/dtheta = n . (-s px - c py, c px - s py)
-            r = nx * (wx[use] - mx[use]) + ny * (wy[use] - my[use])
-            px, py = points[use, 0], points[use, 1]
-            jac = np.stack([nx, ny, nx * (-s * px - c * py) + ny * (c * px - s * py)], axis=1)
-            n = r.size
-            weight = np.where(np.abs(r) <= huber, 1.0, huber / np.maximum(np.abs(r), 1e-12))
-            w = weight / ((POINT_SIGMA_CELLS * res) ** 2 * max(1.0, n / INDEPENDENT_POINTS))
-            deviation = np.array([x - prior.x, y - prior.y, wrap_angle(yaw - prior.yaw)])
-            # Iteratively reweighted Cauchy prior, as in the search: far from odometry it pulls less.
-            info = prior_info / (1.0 + 0.5 * float(np.sum(prior_info * deviation**2)))
-            hess = (jac * w[:, None]).T @ jac + np.diag(info)
-            step = -np.linalg.solve(hess, (jac * w[:, None]).T @ r + info * deviation)
-            x, y, yaw = x + step[0], y + step[1], yaw + step[2]
-            if abs(step[0]) + abs(step[1]) < 1e-5 and abs(step[2]) < 1e-5:
-                break
+        prior_info = np.array([spread[0] ** -2, spread[0] ** -2, spread[1] ** -2], dtype=np.float64)
+        points = np.ascontiguousarray(points, dtype=np.float64)
+        x, y, yaw = _refine(points, _floats(start), _floats(prior), prior_info, iterations, field.kernel_args())
         return Pose2D(x, y, wrap_angle(yaw))
 
     def _evaluate(self, field: DistanceField, likelihood: FloatArray, points: FloatArray, pose: Pose2D) -> MatchResult:
@@ -331,3 +254,250 @@ class ScanMatcher:
         d, _, _ = field.interpolate(wx, wy)
         score = float(np.mean(np.exp(-(d**2) / (2.0 * self.sigma**2))))
         return MatchResult(pose, score, float(np.mean(d < 1.5 * field.resolution)))
+
+
+# Compiled kernels (mrs_nav.jit): the per-point work of the search and the refinement, which numpy can only do
+# through (angles x offsets x points) temporaries and dozens of small-array calls per iteration.
+
+# SurfaceArgs (DistanceField.kernel_args) as a numba type.
+_SURFACE_ARGS = "Tuple((float64, float64, int32[:, ::1], int32[:, ::1], " + GRID_ARRAYS_TYPE + "))"
+
+
+@numba.njit("UniTuple(float64, 2)(" + GRID_ARRAYS_TYPE + ", int64, int64)", cache=True)  # type: ignore[misc]
+def _mean_hit(grid: GridArrays, iy: int, ix: int) -> tuple[float, float]:
+    """LogOddsGrid.mean_hits of one cell."""
+    _, hit_sum, hit_count, origin_x, origin_y, res = grid
+    # np.float64, not float(): numba's float() of a float32 stays float32, and so would the division.
+    count = np.float64(hit_count[iy, ix])
+    dx = np.float64(hit_sum[0, iy, ix]) / count if count > 0.0 else 0.5 * res
+    dy = np.float64(hit_sum[1, iy, ix]) / count if count > 0.0 else 0.5 * res
+    return float(origin_x + ix * res + dx), float(origin_y + iy * res + dy)
+
+
+@numba.njit("float64(" + GRID_ARRAYS_TYPE + ", int64, int64)", cache=True)  # type: ignore[misc]
+def _normal_at(grid: GridArrays, iy: int, ix: int) -> float:
+    """Surface normal angle (rad) at grid cell ``(iy, ix)`` from the principal axes of the mean hits of the
+    occupied cells within ``NORMAL_RADIUS`` (clipped at the grid's edge); NaN where fewer than 3 are."""
+    logodds, _, hit_count, _, _, _ = grid
+    height, width = logodds.shape
+    size = 2 * NORMAL_RADIUS + 1
+    px = np.empty(size * size)
+    py = np.empty(size * size)
+    n = 0
+    for oy in range(-NORMAL_RADIUS, NORMAL_RADIUS + 1):
+        gy = min(max(iy + oy, 0), height - 1)
+        for ox in range(-NORMAL_RADIUS, NORMAL_RADIUS + 1):
+            gx = min(max(ix + ox, 0), width - 1)
+            if logodds[gy, gx] > 0.0 and hit_count[gy, gx] > 0.0:
+                px[n], py[n] = _mean_hit(grid, gy, gx)
+                n += 1
+    if n < 3:
+        return np.nan
+    cx = px[:n].sum() / n
+    cy = py[:n].sum() / n
+    sxx = syy = sxy = 0.0
+    for k in range(n):
+        dx, dy = px[k] - cx, py[k] - cy
+        sxx += dx * dx
+        syy += dy * dy
+        sxy += dx * dy
+    # Principal (tangent) direction of the local hits; the normal is perpendicular to it.
+    return 0.5 * math.atan2(2.0 * sxy, sxx - syy) + 0.5 * math.pi
+
+
+@numba.njit("UniTuple(float64, 3)(float64, float64, " + _SURFACE_ARGS + ")", cache=True)  # type: ignore[misc]
+def _surface(
+    x: float,
+    y: float,
+    surface: SurfaceArgs,
+) -> tuple[float, float, float]:
+    """DistanceField.nearest_surface of one point: mean hit (m) of the nearest occupied cell, normal (rad)."""
+    field_x, field_y, near_iy, near_ix, grid = surface
+    res = grid[5]
+    height, width = near_iy.shape
+    ix = min(max(math.floor((x - field_x) / res), 0), width - 1)
+    iy = min(max(math.floor((y - field_y) / res), 0), height - 1)
+    niy, nix = near_iy[iy, ix], near_ix[iy, ix]
+    if niy < 0:
+        return np.nan, np.nan, np.nan
+    normal = _normal_at(grid, niy, nix)
+    if not math.isfinite(normal):
+        return np.nan, np.nan, np.nan
+    mx, my = _mean_hit(grid, niy, nix)
+    return mx, my, normal
+
+
+@numba.njit("float64[:, ::1](float64[::1], float64[::1], " + _SURFACE_ARGS + ")", cache=True)  # type: ignore[misc]
+def _nearest_surfaces(
+    x: FloatArray,
+    y: FloatArray,
+    surface: SurfaceArgs,
+) -> FloatArray:
+    """Rows mx, my, normal of :func:`_surface` for every point."""
+    out = np.empty((3, x.size))
+    for k in range(x.size):
+        out[0, k], out[1, k], out[2, k] = _surface(x[k], y[k], surface)
+    return out
+
+
+@numba.njit(  # type: ignore[misc]
+    "UniTuple(float64, 3)(float64[:, ::1], UniTuple(float64, 3), UniTuple(float64, 3), float64[::1], int64, "
+    + _SURFACE_ARGS
+    + ")",
+    cache=True,
+)
+def _refine(  # noqa: PLR0917 - numba kernels take positional arguments
+    points: FloatArray,
+    start: tuple[float, float, float],
+    prior: tuple[float, float, float],
+    prior_info: FloatArray,
+    iterations: int,
+    surface: SurfaceArgs,
+) -> tuple[float, float, float]:
+    """ScanMatcher.refine's Gauss-Newton iterations from the laser pose ``start`` (x, y m, yaw rad) with the
+    odometry prior ``prior``; the refined pose (yaw not wrapped)."""
+    x, y, yaw = start
+    prior_x, prior_y, prior_yaw = prior
+    res = surface[4][5]
+    n_points = points.shape[0]
+    cutoff = 4.0 * res  # pairs farther apart than this are not the same surface
+    huber = 0.5 * res
+    residual = np.empty(n_points)
+    jac = np.empty((n_points, 3))
+    for _ in range(iterations):
+        c, s = math.cos(yaw), math.sin(yaw)
+        n = 0
+        for k in range(n_points):
+            px, py = points[k, 0], points[k, 1]
+            wx = x + c * px - s * py
+            wy = y + s * px + c * py
+            mx, my, normal = _surface(wx, wy, surface)
+            if not (math.isfinite(normal) and math.hypot(wx - mx, wy - my) < cutoff):
+                continue
+            nx, ny = math.cos(normal), math.sin(normal)
+            # residual r = n . (R p + t - m); dr/dtheta = n . (-s px - c py, c px - s py)
+            residual[n] = nx * (wx - mx) + ny * (wy - my)
+            jac[n, 0], jac[n, 1] = nx, ny
+            jac[n, 2] = nx * (-s * px - c * py) + ny * (c * px - s * py)
+            n += 1
+        if n < 3:
+            break
+        scale = 1.0 / ((POINT_SIGMA_CELLS * res) ** 2 * max(1.0, n / INDEPENDENT_POINTS))
+        deviation = np.array([x - prior_x, y - prior_y, (yaw - prior_yaw + math.pi) % (2.0 * math.pi) - math.pi])
+        # Iteratively reweighted Cauchy prior, as in the search: far from odometry it pulls less.
+        info = prior_info / (1.0 + 0.5 * np.sum(prior_info * deviation**2))
+        hess = np.diag(info)
+        grad = info * deviation
+        for k in range(n):
+            r = residual[k]
+            w = scale * (1.0 if abs(r) <= huber else huber / max(abs(r), 1e-12))
+            for i in range(3):
+                grad[i] += w * jac[k, i] * r
+                for j in range(3):
+                    hess[i, j] += w * jac[k, i] * jac[k, j]
+        step = -np.linalg.solve(hess, grad)
+        x, y, yaw = x + step[0], y + step[1], yaw + step[2]
+        if abs(step[0]) + abs(step[1]) < 1e-5 and abs(step[2]) < 1e-5:
+            break
+    return x, y, yaw
+
+
+@numba.njit(  # type: ignore[misc]
+    "float64[:, :, ::1](float64[:, ::1], UniTuple(float64, 3), float64[:, ::1], UniTuple(float64, 3), float64[::1], "
+    "int64[::1], UniTuple(int64, 2), UniTuple(float64, 2))",
+    cache=True,
+)
+def _search_scores(  # noqa: PLR0917 - numba kernels take positional arguments
+    table: FloatArray,
+    window: tuple[float, float, float],
+    points: FloatArray,
+    prior: tuple[float, float, float],
+    angles: FloatArray,
+    offsets: IntArray,
+    base: tuple[int, int],
+    spread: tuple[float, float],
+) -> FloatArray:
+    """ScanMatcher._scores: for every heading ``prior`` yaw + ``angles`` (rad) and every (x, y) cell offset
+    ``base`` + ``offsets``, the mean ``table`` value (a window: corner x, y and resolution, m) under ``points``
+    (laser frame) placed there, cell indices clipped into the table, minus the odometry prior's penalty with
+    standard deviations ``spread`` (m, rad): an (angles, x offsets, y offsets) array."""
+    origin_x, origin_y, res = window
+    x, y = prior[0] + base[0] * res, prior[1] + base[1] * res
+    height, width = table.shape
+    n = points.shape[0]
+    k = offsets.size
+    out = np.empty((angles.size, k, k))
+    ix = np.empty(n, dtype=np.int64)
+    iy = np.empty(n, dtype=np.int64)
+    for a in range(angles.size):
+        yaw = prior[2] + angles[a]
+        c, s = math.cos(yaw), math.sin(yaw)
+        for p in range(n):
+            px, py = points[p, 0], points[p, 1]
+            ix[p] = min(max(math.floor((x + c * px - s * py - origin_x) / res), 0), width - 1)
+            iy[p] = min(max(math.floor((y + s * px + c * py - origin_y) / res), 0), height - 1)
+        for kx in range(k):
+            for ky in range(k):
+                total = 0.0
+                for p in range(n):
+                    row = min(max(iy[p] + offsets[ky], 0), height - 1)
+                    col = min(max(ix[p] + offsets[kx], 0), width - 1)
+                    total += table[row, col]
+                z2 = (angles[a] / spread[1]) ** 2 + ((base[0] + offsets[kx]) * res / spread[0]) ** 2
+                z2 += ((base[1] + offsets[ky]) * res / spread[0]) ** 2
+                out[a, kx, ky] = total / n - PRIOR_WEIGHT * math.log1p(0.5 * z2)
+    return out
+
+
+@numba.njit(  # type: ignore[misc]
+    "UniTuple(int32[:, ::1], 3)(int32[:, :, ::1], int64, int64, int64, int64)", cache=True
+)
+def _padded_field(near: CellArray, pad: int, y0: int, x0: int, cap: int) -> tuple[CellArray, CellArray, CellArray]:
+    """DistanceField's arrays from the window's nearest occupied cells ``near`` (window indices, as
+    ``distance_transform_edt`` gives them; the window's corner is grid cell ``(y0, x0)``): the squared distance
+    in cells (at most ``cap``) and the nearest cell's grid indices, padded by ``pad`` cells of ``cap`` and -1."""
+    height, width = near.shape[1], near.shape[2]
+    shape = (height + 2 * pad, width + 2 * pad)
+    squared = np.full(shape, cap, dtype=np.int32)
+    near_iy = np.full(shape, -1, dtype=np.int32)
+    near_ix = np.full(shape, -1, dtype=np.int32)
+    for row in range(height):
+        for col in range(width):
+            ny, nx = near[0, row, col], near[1, row, col]
+            squared[row + pad, col + pad] = min((ny - row) ** 2 + (nx - col) ** 2, cap)
+            near_iy[row + pad, col + pad] = ny + y0
+            near_ix[row + pad, col + pad] = nx + x0
+    return squared, near_iy, near_ix
+
+
+@numba.njit(  # type: ignore[misc]
+    "UniTuple(float64[:, ::1], 2)(int32[:, ::1], float64[::1], float64, float64, int64)", cache=True
+)
+def _likelihoods(
+    squared: CellArray, distance_table: FloatArray, sigma: float, sigma_coarse: float, half: int
+) -> tuple[FloatArray, FloatArray]:
+    """The likelihood field ``exp(-d^2 / (2 sigma^2))`` of the distances ``distance_table[squared]`` (m), and
+    the coarse one (``sigma_coarse``) max-pooled over ``2 half + 1`` cells square (edge cells repeated beyond
+    the edge)."""
+    fine_table = np.exp(-(distance_table**2) / (2.0 * sigma**2))
+    wide_table = np.exp(-(distance_table**2) / (2.0 * sigma_coarse**2))
+    height, width = squared.shape
+    # The likelihood falls as the squared distance grows: the block maximum of the likelihood is the
+    # likelihood of the block minimum of the squared distance, pooled (separably, columns then rows) on ints.
+    across = np.empty((height, width), dtype=np.int32)
+    for row in range(height):
+        for col in range(width):
+            nearest = squared[row, max(col - half, 0)]
+            for c in range(max(col - half, 0) + 1, min(col + half, width - 1) + 1):
+                nearest = min(nearest, squared[row, c])
+            across[row, col] = nearest
+    likelihood = np.empty((height, width))
+    pooled = np.empty((height, width))
+    for row in range(height):
+        for col in range(width):
+            nearest = across[max(row - half, 0), col]
+            for r in range(max(row - half, 0) + 1, min(row + half, height - 1) + 1):
+                nearest = min(nearest, across[r, col])
+            likelihood[row, col] = fine_table[squared[row, col]]
+            pooled[row, col] = wide_table[nearest]
+    return likelihood, pooled
