@@ -167,9 +167,14 @@ class OmplPlanner:
         self.objective = ob.PathLengthOptimizationObjective(si)
         self.setup.setOptimizationObjective(self.objective)
         self.si = si
+        # A start or goal state that fails the cell test: OMPL's planners then wait (BIT* sleeps in nextGoal) for
+        # a valid goal until the condition ends, which a CPU-time condition never does. Such a query has no path.
+        self.solvable = bool(si.isValid(s) and si.isValid(g))
 
     def solve(self, seconds: float, threshold: float) -> tuple[float, float]:
         """Plan until a path of at most ``threshold`` m or ``seconds`` of CPU; (CPU seconds, length or inf)."""
+        if not self.solvable:
+            return math.inf, math.inf
         self.setup.clear()
         self.objective.setCostThreshold(self.ob.Cost(threshold))
         self.setup.setPlanner(self.planner(self.si))

@@ -37,11 +37,8 @@ import numpy.typing as npt
 
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.occupancy_grid import BoolArray, IntArray, OccupancyGrid
-
-# Chords shorter than this (metres) do not define a direction, so no arc.
-_MIN_CHORD = 1e-9
-# |alpha| must stay below a right angle by this much for the target to be strictly ahead.
-_FORWARD_MARGIN = 1e-9
+from mrs_nav.trees import kernels
+from mrs_nav.trees.kernels import MIN_CHORD
 
 
 class Arcs(NamedTuple):
@@ -78,17 +75,22 @@ def connect(start: npt.ArrayLike, yaw: npt.ArrayLike, target: npt.ArrayLike) -> 
     phi = np.arctan2(d[:, 1], d[:, 0])
     alpha = (phi - theta1 + np.pi) % (2.0 * np.pi) - np.pi
     sin_alpha = np.sin(alpha)
-    curvature = 2.0 * sin_alpha / np.maximum(chord, _MIN_CHORD)
+    curvature = 2.0 * sin_alpha / np.maximum(chord, MIN_CHORD)
     # S = L alpha / sin(alpha), and S = L on the straight line (alpha = 0).
     length = chord * np.divide(alpha, sin_alpha, out=np.ones_like(alpha), where=sin_alpha != 0.0)
     end_yaw = (theta1 + 2.0 * alpha + np.pi) % (2.0 * np.pi) - np.pi
     return Arcs(p1, theta1, alpha, chord, curvature, length, end_yaw)
 
 
+def alpha_limit(max_alpha: float) -> float:
+    """The largest ``|alpha|`` allowed: ``max_alpha``, kept strictly below a right angle (the target ahead)."""
+    return min(max_alpha, math.pi / 2 - kernels.FORWARD_MARGIN)
+
+
 def feasible(arcs: Arcs, max_alpha: float = math.pi / 2, min_turning_radius: float = 0.0) -> BoolArray:
     """True for arcs that drive forward with ``|alpha| <= max_alpha`` (< pi/2) and radius >= the minimum."""
-    limit = min(max_alpha, math.pi / 2 - _FORWARD_MARGIN)
-    ok: BoolArray = (arcs.chord > _MIN_CHORD) & (np.abs(arcs.alpha) <= limit)
+    limit = alpha_limit(max_alpha)
+    ok: BoolArray = (arcs.chord > MIN_CHORD) & (np.abs(arcs.alpha) <= limit)
     if min_turning_radius > 0.0:
         ok &= np.abs(arcs.curvature) * min_turning_radius <= 1.0
     return ok
@@ -125,46 +127,14 @@ def sample(
 
 
 def collision_free(arcs: Arcs, grid: OccupancyGrid, where: BoolArray | None = None) -> BoolArray:
-    """True for arcs whose every point lies in a free cell of ``grid`` (checked as the module docstring says).
+    """True for arcs whose every point lies in a free cell of ``grid`` (checked as the module docstring says,
+    arc by arc in compiled code: :func:`mrs_nav.trees.kernels.arc_free`).
 
     With ``where``, only those arcs are checked and the others come back False.
     """
-    if len(arcs.length) == 0:
-        return np.zeros(0, dtype=bool)
-    poses, first = sample(arcs, grid.resolution, where, with_yaw=False)
-    free = grid.lookup(grid.conservative_free_mask, poses)
-    ok: BoolArray = np.logical_and.reduceat(free, first[:-1])
-    if where is not None:
-        ok &= where
-    undecided = ~ok if where is None else ~ok & where
-    if undecided.any():
-        # Arcs with a sample in a blocked cell are in collision; the others get the fine check.
-        plain = np.logical_and.reduceat(grid.lookup(grid.free_mask, poses), first[:-1])
-        retry = np.flatnonzero(undecided & plain)
-        if len(retry):
-            ok[retry] = _finely_free(take(arcs, retry), grid)
-    return ok
-
-
-def _finely_free(arcs: Arcs, grid: OccupancyGrid) -> BoolArray:
-    """The fine check of the module docstring: samples every resolution / 8 and the corners they cut."""
-    poses, first = sample(arcs, grid.resolution / 8.0, with_yaw=False)
-    row, col, inside = grid.cells(poses)
-    flat = row * grid.width + col
-    flat *= inside
-    mask = grid.free_mask.reshape(-1)
-    good = mask.take(flat) & inside
-    # Consecutive samples of one arc in diagonal cells: both cells of that corner must be free.
-    same_arc = np.ones(len(poses) - 1, dtype=bool)
-    same_arc[first[1:-1] - 1] = False
-    corner = same_arc & (row[:-1] != row[1:]) & (col[:-1] != col[1:]) & inside[:-1] & inside[1:]
-    k = np.flatnonzero(corner)
-    if len(k):
-        a = mask.take(row[k] * grid.width + col[k + 1])
-        b = mask.take(row[k + 1] * grid.width + col[k])
-        good[k] &= a & b
-    ok: BoolArray = np.logical_and.reduceat(good, first[:-1])
-    return ok
+    mask = np.ones(len(arcs.length), dtype=bool) if where is None else np.ascontiguousarray(where, dtype=bool)
+    start = np.ascontiguousarray(arcs.start, dtype=np.float64)
+    return kernels.arcs_free(start, arcs.yaw, arcs.curvature, arcs.length, mask, kernels.grid_args(grid))
 
 
 def checked(
@@ -181,7 +151,7 @@ def find_circle(pose: Pose2D, position: npt.ArrayLike) -> tuple[FloatArray, floa
     """
     arc = connect(pose.position, pose.yaw, np.asarray(position, dtype=np.float64)[:2])
     kappa = float(arc.curvature[0])
-    if kappa == 0.0 or arc.chord[0] <= _MIN_CHORD:
+    if kappa == 0.0 or arc.chord[0] <= MIN_CHORD:
         return np.array([math.nan, math.nan]), math.inf
     # The centre lies on the normal to the left of the heading for a left turn (kappa > 0).
     normal = np.array([-math.sin(pose.yaw), math.cos(pose.yaw)])

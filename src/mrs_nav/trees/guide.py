@@ -18,6 +18,7 @@ import numpy as np
 from mrs_nav.geometry import FloatArray
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.maps.wavefront import Wavefront, wavefront
+from mrs_nav.trees import kernels
 
 # Draws per guided target (the first one in free space is kept).
 _TRIES = 8
@@ -35,7 +36,10 @@ class CorridorSampler:
         # Metres still to go at each corridor point, decreasing from the start to 0 at the goal.
         steps = np.hypot(*np.diff(path, axis=0).T)
         self.to_go = np.append(np.cumsum(steps[::-1])[::-1], 0.0)
-        self.frontier = float(self.to_go[0])
+        self._frontier = float(self.to_go[0])
+        # Nodes reported since the frontier was last read: looked up in one batch when it is needed.
+        self._pending: list[FloatArray] = []
+        self._grid_args = kernels.grid_args(wave.grid)
 
     @classmethod
     def towards(
@@ -53,7 +57,15 @@ class CorridorSampler:
 
     def reached(self, position: FloatArray) -> None:
         """Note a new tree node: it moves the frontier when it is geodesically closer to the goal."""
-        self.frontier = min(self.frontier, float(self.wave.at(position)[0]))
+        self._pending.append(position)
+
+    @property
+    def frontier(self) -> float:
+        """The least distance to go (m) among the nodes reported so far (the corridor's start before any)."""
+        if self._pending:
+            self._frontier = min(self._frontier, float(self.wave.at(np.array(self._pending)).min()))
+            self._pending.clear()
+        return self._frontier
 
     def sample(self, rng: np.random.Generator) -> FloatArray:
         """A target near the corridor point ``U(0, lookahead)`` metres beyond the frontier, in a free cell whose
@@ -61,7 +73,6 @@ class CorridorSampler:
         to_go = self.frontier - rng.random(_TRIES) * self.lookahead
         k = np.minimum(np.searchsorted(-self.to_go, -to_go), len(self.path) - 1)
         points = self.path[k] + rng.normal(0.0, self.spread, (_TRIES, 2))
-        grid = self.wave.grid
-        free = grid.lookup(grid.conservative_free_mask, points)
+        free = kernels.lookup(points, self._grid_args[0], self._grid_args)
         out: FloatArray = points[int(np.argmax(free))]
         return out

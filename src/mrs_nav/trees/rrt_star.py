@@ -34,9 +34,9 @@ import numpy as np
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D
-from mrs_nav.maps.occupancy_grid import BoolArray, OccupancyGrid
+from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.planning import PlanResult, path_length
-from mrs_nav.trees import arcs
+from mrs_nav.trees import arcs, kernels
 from mrs_nav.trees.guide import CorridorSampler
 from mrs_nav.trees.rrt import check_budget, check_query, failed, sample_random_position
 from mrs_nav.trees.tree import ArcTree, Search
@@ -45,6 +45,9 @@ from mrs_nav.trees.tree import ArcTree, Search
 _EPS = 1e-9
 # How many nearest nodes a guided target may be steered from.
 _AHEAD_CANDIDATES = 8
+# Informed samples are drawn this many at a time, for at most this many batches before falling back to the map.
+_INFORMED_BATCH = 256
+_INFORMED_BATCHES = 8
 
 
 @dataclass(frozen=True)
@@ -105,18 +108,25 @@ class InformedSampler:
         # unit disk -> ellipse: scale by (a, b), rotate by angle
         self.transform = np.array([[a * c, a * s], [-b * s, b * c]])
         self.centre = (start + goal) / 2.0
+        self._grid_args = kernels.grid_args(grid)
+        self._free = np.zeros((0, 2))
+        self._next = 0
 
     def sample(self, rng: np.random.Generator) -> FloatArray:
-        """One free position in the ellipse (or anywhere free on the map if the ellipse shows none)."""
-        for _ in range(64):
-            r = np.sqrt(rng.random(32))
-            t = rng.random(32) * (2.0 * math.pi)
-            disk = np.stack([r * np.cos(t), r * np.sin(t)], axis=1)
-            points = disk @ self.transform + self.centre
-            free = np.flatnonzero(self.grid.is_free(points))
-            if len(free):
-                out: FloatArray = points[free[0]]
+        """One free position in the ellipse (or anywhere free on the map if the ellipse shows none).
+
+        Points are drawn in batches and the free ones handed out in turn: each is still uniform over the free
+        part of the ellipse, and a batch costs a handful of numpy calls instead of a handful per sample."""
+        for _ in range(_INFORMED_BATCHES):
+            if self._next < len(self._free):
+                self._next += 1
+                out: FloatArray = self._free[self._next - 1]
                 return out
+            r = np.sqrt(rng.random(_INFORMED_BATCH))
+            t = rng.random(_INFORMED_BATCH) * (2.0 * math.pi)
+            points = np.stack([r * np.cos(t), r * np.sin(t)], axis=1) @ self.transform + self.centre
+            self._free = points[kernels.lookup(points, self._grid_args[1], self._grid_args)]
+            self._next = 0
         return sample_random_position(self.grid, rng)
 
 
@@ -131,10 +141,7 @@ class _Planner:
         self.tree = ArcTree(start, capacity=4096)
         self.gamma = config.gamma if config.gamma is not None else default_gamma(grid)
         self.goal_node = -1
-
-    def arcs_ok(self, batch: arcs.Arcs) -> BoolArray:
-        """Feasible and collision-free mask of a batch."""
-        return arcs.checked(batch, self.grid, self.config.max_alpha, self.config.min_turning_radius)
+        self.grid_args = kernels.grid_args(grid)
 
     def extend(self, target: FloatArray, ahead: bool = False) -> int:
         """Steps 2-4 towards ``target``; returns the new node's id or -1.
@@ -157,97 +164,85 @@ class _Planner:
             if d <= self.config.step
             else tree.position[nearest] + (target - tree.position[nearest]) * (self.config.step / d)
         )
-        if not self.grid.lookup(self.grid.conservative_free_mask, x_new)[0]:
+        if not kernels.lookup_one(x_new[0], x_new[1], self.grid_args[0], self.grid_args):
             return -1
         n = len(tree)
         radius = min(self.config.step, self.gamma * math.sqrt(math.log(n + 1) / (n + 1)))
         near = tree.within(x_new, radius)
         if nearest not in near:
             near = np.append(near, nearest)
-        # Step 3: the cheapest valid parent. Collision checks are lazy: the cheapest feasible arc alone first
-        # (usually free), then all the others in one batch.
-        into = arcs.connect(tree.position[near], tree.yaw[near], x_new)
-        cost = tree.cost[near] + into.length
-        cand = np.flatnonzero(arcs.feasible(into, self.config.max_alpha, self.config.min_turning_radius))
-        if not len(cand):
+        # Step 3: the cheapest valid parent (compiled; collision checks lazily in order of cost).
+        limit = arcs.alpha_limit(self.config.max_alpha)
+        parent, yaw, cost = kernels.best_parent(
+            near,
+            tree.position,
+            tree.yaw,
+            tree.cost,
+            x_new[0],
+            x_new[1],
+            limit,
+            self.config.min_turning_radius,
+            self.grid_args,
+        )
+        if parent < 0:
             return -1
-        cand = cand[np.argsort(cost[cand], kind="stable")]
-        if arcs.collision_free(arcs.take(into, cand[:1]), self.grid)[0]:
-            best = int(cand[0])
-        else:
-            free = arcs.collision_free(arcs.take(into, cand[1:]), self.grid)
-            if not free.any():
-                return -1
-            best = int(cand[1:][np.argmax(free)])
-        parent = int(near[best])
-        new = tree.add(x_new, float(into.end_yaw[best]), parent, float(cost[best]))
+        new = tree.add(x_new, yaw, parent, cost)
         if self.goal_node < 0 and float(np.hypot(*(x_new - self.goal))) <= _EPS:
             self.goal_node = new
         # Step 4: rewire the other near nodes through x_new.
         others = near[near != parent]
         if len(others):
-            out = arcs.connect(x_new, tree.yaw[new], tree.position[others])
-            new_cost = tree.cost[new] + out.length
-            better = new_cost < tree.cost[others] - _EPS
-            if better.any():
-                idx = np.flatnonzero(better)
-                sub = arcs.take(out, idx)
-                valid = self.arcs_ok(sub)
-                for k in np.flatnonzero(valid):
-                    j = int(others[idx[k]])
-                    if new_cost[idx[k]] < tree.cost[j] - _EPS:
-                        self.rewire(j, new, float(sub.end_yaw[k]), float(new_cost[idx[k]]))
+            ids, yaws, costs = kernels.rewire_candidates(
+                others, tree.position, tree.cost, new, yaw, limit, self.config.min_turning_radius, self.grid_args
+            )
+            for j, end_yaw, through in zip(ids.tolist(), yaws.tolist(), costs.tolist(), strict=True):
+                # An earlier rewire of this loop may have made j cheaper already.
+                if through < tree.cost[j] - _EPS:
+                    self.rewire(j, new, end_yaw, through)
         return new
 
     def rewire(self, node: int, new_parent: int, yaw: float, cost: float) -> bool:
         """Move ``node`` under ``new_parent`` with ``yaw`` and ``cost`` if its whole subtree stays valid and no
-        node of it gets more expensive (see the module docstring).
-
-        The subtree's new yaws and costs are derived level by level (cheap arc algebra, stopping at the first
-        node that would get worse or an infeasible arc); the collision check of all its new arcs is one batch.
-        """
+        node of it gets more expensive (see the module docstring; the check is compiled:
+        :func:`mrs_nav.trees.kernels.rederive_subtree`)."""
         tree = self.tree
-        levels = tree.subtree(node)
-        new_yaw = np.empty(len(tree))
-        new_cost = np.empty(len(tree))
-        new_yaw[node] = yaw
-        new_cost[node] = cost
-        if levels:
-            ids = np.array([i for level in levels for i in level], dtype=np.intp)
-            start = 0
-            for level in levels:
-                lv = ids[start : start + len(level)]
-                start += len(level)
-                par = tree.parent[lv]
-                batch = arcs.connect(tree.position[par], new_yaw[par], tree.position[lv])
-                level_cost = new_cost[par] + batch.length
-                if (
-                    np.any(level_cost > tree.cost[lv] + _EPS)
-                    or not arcs.feasible(batch, self.config.max_alpha, self.config.min_turning_radius).all()
-                ):
-                    return False
-                new_yaw[lv] = batch.end_yaw
-                new_cost[lv] = level_cost
-            par = tree.parent[ids]
-            if not arcs.collision_free(
-                arcs.connect(tree.position[par], new_yaw[par], tree.position[ids]), self.grid
-            ).all():
-                return False
-            tree.yaw[ids] = new_yaw[ids]
-            tree.cost[ids] = new_cost[ids]
+        ids = np.array([i for level in tree.subtree(node) for i in level], dtype=np.intp)
+        limit = arcs.alpha_limit(self.config.max_alpha)
+        if not kernels.rederive_subtree(
+            ids,
+            node,
+            yaw,
+            cost,
+            tree.parent,
+            tree.position,
+            tree.yaw,
+            tree.cost,
+            limit,
+            self.config.min_turning_radius,
+            self.grid_args,
+        ):
+            return False
         tree.reparent(node, new_parent)
-        tree.yaw[node] = yaw
-        tree.cost[node] = cost
         return True
 
     def try_goal(self, node: int) -> None:
         """Connect ``node`` straight to the goal when it is within one step: finds the first path sooner."""
         tree = self.tree
-        if self.goal_node >= 0 or float(np.hypot(*(tree.position[node] - self.goal))) > self.config.step:
+        x, y = tree.position[node]
+        if self.goal_node >= 0 or math.hypot(self.goal[0] - x, self.goal[1] - y) > self.config.step:
             return
-        arc = arcs.connect(tree.position[node], tree.yaw[node], self.goal)
-        if self.arcs_ok(arc)[0]:
-            self.goal_node = tree.add(self.goal, float(arc.end_yaw[0]), node, float(tree.cost[node] + arc.length[0]))
+        length, yaw = kernels.checked_arc(
+            x,
+            y,
+            tree.yaw[node],
+            self.goal[0],
+            self.goal[1],
+            arcs.alpha_limit(self.config.max_alpha),
+            self.config.min_turning_radius,
+            self.grid_args,
+        )
+        if math.isfinite(length):
+            self.goal_node = tree.add(self.goal, yaw, node, float(tree.cost[node] + length))
 
 
 def grow_rrt_star(

@@ -1,12 +1,12 @@
-"""The tree grown by RRT and RRT*: nodes with poses, parents and costs, a spatial index, and path extraction.
+"""The tree grown by RRT and RRT*: nodes with poses, parents and costs, nearest-node queries and path extraction.
 
 Nodes live in growing numpy arrays (position, yaw, cost = arc length from the root, parent). Every edge is the
 arc from the parent's pose to the child's position, and a child's yaw is that arc's end yaw, so a path through
 the tree is a chain of tangent-continuous arcs.
 
-Nearest and near queries go through a :class:`scipy.spatial.cKDTree` built over the first nodes plus a linear
-(vectorised) scan of the few nodes added since; the kd-tree is rebuilt when that tail grows past an eighth of
-the tree (at least 64 nodes), which keeps both the rebuild cost per insertion and the tail scan small.
+Nearest and near queries are one compiled linear scan over the nodes (:mod:`mrs_nav.trees.kernels`): at the
+sizes a search reaches (thousands of nodes) a scan costs a few microseconds, less than one call into a kd-tree
+and without the rebuilds a growing tree needs.
 """
 
 from __future__ import annotations
@@ -15,14 +15,11 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
-from scipy.spatial import cKDTree
 
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.occupancy_grid import IntArray
 from mrs_nav.planning import PlanResult
-from mrs_nav.trees import arcs
-
-_MIN_TAIL = 64
+from mrs_nav.trees import arcs, kernels
 
 
 class ArcTree:
@@ -36,8 +33,6 @@ class ArcTree:
         self.parent: IntArray = np.full(capacity, -1, dtype=np.intp)
         self.children: list[list[int]] = []
         self.size = 0
-        self._index: cKDTree | None = None
-        self._indexed = 0
         self.add(root.position, root.yaw, -1, 0.0)
 
     def __len__(self) -> int:
@@ -60,9 +55,6 @@ class ArcTree:
         if parent >= 0:
             self.children[parent].append(i)
         self.size += 1
-        if self.size - self._indexed > max(_MIN_TAIL, self.size // 8):
-            self._index = cKDTree(self.position[: self.size])
-            self._indexed = self.size
         return i
 
     def reparent(self, node: int, new_parent: int) -> None:
@@ -73,33 +65,11 @@ class ArcTree:
 
     def nearest(self, point: FloatArray, k: int = 1) -> tuple[IntArray, FloatArray]:
         """Ids and distances of the ``k`` nodes nearest to ``point`` (fewer when the tree is smaller), nearest first."""
-        ids = []
-        dists = []
-        if self._index is not None:
-            kk = min(k, self._indexed)
-            d, i = self._index.query(point, k=kk)
-            ids.append(np.atleast_1d(i).astype(np.intp))
-            dists.append(np.atleast_1d(d))
-        tail = np.arange(self._indexed, self.size)
-        if len(tail):
-            dt = self.position[tail] - point
-            ids.append(tail)
-            dists.append(np.hypot(dt[:, 0], dt[:, 1]))
-        all_ids = np.concatenate(ids)
-        all_d = np.concatenate(dists)
-        order = np.argsort(all_d, kind="stable")[:k]
-        return all_ids[order], all_d[order]
+        return kernels.nearest_k(self.position, self.size, float(point[0]), float(point[1]), k)
 
     def within(self, point: FloatArray, radius: float) -> IntArray:
-        """Ids of the nodes within ``radius`` metres of ``point`` (any order)."""
-        parts = []
-        if self._index is not None:
-            parts.append(np.asarray(self._index.query_ball_point(point, radius), dtype=np.intp))
-        if self.size > self._indexed:
-            dt = self.position[self._indexed : self.size] - point
-            close = np.flatnonzero(dt[:, 0] ** 2 + dt[:, 1] ** 2 <= radius * radius)
-            parts.append(close + self._indexed)
-        return np.concatenate(parts) if parts else np.zeros(0, dtype=np.intp)
+        """Ids of the nodes within ``radius`` metres of ``point`` (in id order)."""
+        return kernels.within_radius(self.position, self.size, float(point[0]), float(point[1]), radius)
 
     def subtree(self, node: int) -> list[list[int]]:
         """The descendants of ``node`` level by level (``node`` itself excluded)."""
