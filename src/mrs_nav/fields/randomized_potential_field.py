@@ -20,7 +20,8 @@ The point moves by explicit Euler steps ``x[t + dt] = x[t] + v dt`` in one of tw
   :mod:`mrs_nav.fields.navigation_function`: it heads at ``max_speed`` for a point a few cells down the geodesic
   distance to the goal, which has no local minimum, and returns to best first once that distance is
   ``guide_margin`` below the distance at the worst trap so far *and* the goal is in straight sight. The guide
-  never passes a gap the (grown) obstacles close.
+  never passes a gap the (grown) obstacles close; when it says the goal cannot be reached from the start at all
+  (e.g. behind a door narrower than the robot), every seed fails at once with the reason :data:`NO_PATH`.
 
 Steps that would enter an obstacle are refused (the point stays and, in a walk, draws a new heading), so
 the trajectory never crosses an obstacle even where the random walk's speed exceeds the field's.
@@ -48,6 +49,10 @@ from mrs_nav.maps.obstacles import BoolArray
 from mrs_nav.planning import PlanResult, headings_along, path_length
 
 REACHED = "goal reached"
+NO_PATH = (
+    "no path: the obstacles, grown by the robot radius, close the goal off from the start "
+    "(a gap narrower than the robot counts as closed)"
+)
 
 
 @dataclass(frozen=True)
@@ -107,19 +112,39 @@ class Rollout:
     walk_steps: int
 
 
+def navigation_guide(field: PotentialField, start: tuple[float, float]) -> NavigationFunction:
+    """The wavefront guide to the field's goal over the workspace spanned by ``start``, goal and obstacles."""
+    return NavigationFunction(field.obstacles, field.goal, workspace_bounds(field.obstacles, start, field.goal))
+
+
 def roll_out(
     field: PotentialField,
     start: tuple[float, float],
     seeds: Sequence[int],
     settings: EscapeSettings = EscapeSettings(),
+    guide: NavigationFunction | None = None,
 ) -> list[Rollout]:
-    """Simulate the randomised descent from ``start`` once per seed, vectorised over the seeds."""
+    """Simulate the randomised descent from ``start`` once per seed, vectorised over the seeds.
+
+    ``guide`` (built from ``field`` and ``start`` when not given) is used only when ``settings`` turn it on.
+    """
     s = settings
     if any(seed < 0 for seed in seeds):
         raise InvalidInputError(f"seeds must be >= 0, got {min(seeds)}")
     start_xy = np.asarray(start, dtype=np.float64)
     if field.obstacles.contains(start_xy)[0]:
         raise InvalidInputError(f"start ({start[0]}, {start[1]}) is inside an obstacle")
+    goal = np.asarray(field.goal, dtype=np.float64)
+    if s.guide_after_walks is None:
+        guide = None
+    elif guide is None:
+        guide = navigation_guide(field, start)
+    if guide is not None and not guide.reaches_goal(start_xy[None, :])[0]:
+        # Refused before any step: no walk could get there, and the descent must not squeeze through.
+        return [
+            Rollout(int(seed), start_xy[None, :].copy(), np.zeros(0, dtype=bool), False, NO_PATH, 0, 0)
+            for seed in seeds
+        ]
     n = len(seeds)
     noise = np.empty((s.max_steps, n, 2))
     turns = np.empty((s.max_steps, n))
@@ -130,12 +155,6 @@ def roll_out(
         noise[:, i] = rng.normal(0.0, s.noise_std, (s.max_steps, 2)) if s.noise_std > 0 else 0.0
         turns[:, i] = rng.normal(0.0, s.walk_angle_std, s.max_steps)
 
-    goal = np.asarray(field.goal, dtype=np.float64)
-    guide = (
-        NavigationFunction(field.obstacles, field.goal, workspace_bounds(field.obstacles, start_xy, goal))
-        if s.guide_after_walks is not None
-        else None
-    )
     guiding = np.zeros(n, dtype=bool)
     walks = np.zeros(n, dtype=np.int64)
     trap = np.full(n, math.inf)
@@ -230,14 +249,31 @@ def roll_out(
     return results
 
 
-def planned_points(field: PotentialField, rollout: Rollout, *, simplify: bool = True) -> FloatArray:
+def planned_points(
+    field: PotentialField, rollout: Rollout, *, simplify: bool = True, guide: NavigationFunction | None = None
+) -> FloatArray:
     """The ``(K, 2)`` waypoints a plan hands on: the rollout's trajectory, ended on the goal when it succeeded
-    (the descent stops ``goal_tolerance`` short of it), then simplified against the field's obstacles."""
+    (the descent stops ``goal_tolerance`` short of it), then simplified against the field's obstacles.
+
+    With a ``guide`` and a successful rollout, the guide's corridor from the start, simplified the same way, is
+    handed on instead when it is collision free and shorter: the descent can take the long way round an obstacle
+    without ever stalling (along a tilted wall past its gap, round the far side of a room), which shortcuts
+    along its own trajectory cannot undo.
+    """
     points = rollout.trajectory
     goal = np.asarray(field.goal, dtype=np.float64)
     if rollout.success and field.obstacles.segments_free(points[-1:], goal[None, :])[0]:
         points = np.vstack([points, goal])
-    return simplify_path(points, field.obstacles.segments_free) if simplify else points
+    if not simplify:
+        return points
+    path = simplify_path(points, field.obstacles.segments_free)
+    corridor = guide.corridor(points[0]) if guide is not None and rollout.success else None
+    if corridor is None:
+        return path
+    shortcut = simplify_path(corridor, field.obstacles.segments_free)
+    if field.obstacles.path_free(shortcut) and path_length(shortcut) < path_length(path):
+        return shortcut
+    return path
 
 
 def plan_potential_field(
@@ -250,12 +286,14 @@ def plan_potential_field(
 ) -> PlanResult:
     """One potential-field plan from ``start`` ``(x, y, yaw)`` to the field's goal.
 
-    The waypoints are :func:`planned_points` of the rollout, each with the heading of the segment leaving it;
-    the first keeps the start's yaw and the last the heading of the segment reaching it.
+    The waypoints are :func:`planned_points` of the rollout (with the guide when ``settings`` use one), each
+    with the heading of the segment leaving it; the first keeps the start's yaw and the last the heading of the
+    segment reaching it.
     """
     began = time.perf_counter()
-    (rollout,) = roll_out(field, (start[0], start[1]), [seed], settings)
-    path = headings_along(planned_points(field, rollout, simplify=simplify))
+    guide = navigation_guide(field, (start[0], start[1])) if settings.guide_after_walks is not None else None
+    (rollout,) = roll_out(field, (start[0], start[1]), [seed], settings, guide)
+    path = headings_along(planned_points(field, rollout, simplify=simplify, guide=guide))
     path[0, 2] = start[2]
     elapsed = time.perf_counter() - began
     return PlanResult(
