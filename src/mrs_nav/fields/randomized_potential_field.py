@@ -65,7 +65,8 @@ class EscapeSettings:
     how many stalled steps end a plan when the random walk is off; ``min_walk_steps`` the shortest walk;
     ``walk_angle_std`` (rad) the heading noise of the walk; ``guide_after_walks`` how many random walks a point
     makes before the navigation function takes over at its next stall (``None``: never, the assignment's method), and
-    ``guide_margin`` (m) how much closer to the goal than the trap the guide leads before best first resumes.
+    ``guide_margin`` (m) how much closer to the goal than the trap the guide leads before best first resumes, and
+    ``guide_patience`` how many guided steps without getting 1 mm closer end the guided phase in a random walk.
     """
 
     dt: float = 0.01
@@ -80,6 +81,7 @@ class EscapeSettings:
     walk_angle_std: float = math.pi
     guide_after_walks: int | None = 1
     guide_margin: float = 0.5
+    guide_patience: int = 100
 
     def __post_init__(self) -> None:
         if self.guide_after_walks is not None and self.guide_after_walks < 0:
@@ -90,7 +92,7 @@ class EscapeSettings:
                 raise InvalidInputError(
                     f"{name} must be a finite number {'> 0' if name == 'dt' else '>= 0'}, got {value}"
                 )
-        for name in ("max_steps", "stall_steps", "min_walk_steps"):
+        for name in ("max_steps", "stall_steps", "min_walk_steps", "guide_patience"):
             value = getattr(self, name)
             if value < (0 if name == "min_walk_steps" else 1):
                 raise InvalidInputError(f"{name} must be {'>= 0' if name == 'min_walk_steps' else '>= 1'}, got {value}")
@@ -158,6 +160,8 @@ def roll_out(
     guiding = np.zeros(n, dtype=bool)
     walks = np.zeros(n, dtype=np.int64)
     trap = np.full(n, math.inf)
+    guide_best = np.full(n, math.inf)  # the nearest to the goal (guide's distance) in the current guided phase
+    guide_idle = np.zeros(n, dtype=np.int64)  # guided steps since that improved
     path = np.empty((s.max_steps + 1, n, 2))
     path[0] = start_xy
     walked = np.zeros((s.max_steps, n), dtype=bool)
@@ -182,6 +186,7 @@ def roll_out(
         if guide is not None and s.guide_after_walks is not None:
             handed = fresh & (walks[idx] >= s.guide_after_walks)
             guiding[idx[handed]] = True
+            guide_best[idx[handed]], guide_idle[idx[handed]] = math.inf, 0
             trap[idx[handed]] = np.minimum(trap[idx[handed]], guide.distance(here[handed]))
             fresh &= ~handed
         if s.random_walk:
@@ -209,9 +214,21 @@ def roll_out(
         walked[k, idx[walk | led]] = True
         walk_age[idx[walk]] += 1
         if guide is not None and led.any():
-            closer = guide.distance(new[led]) < trap[idx[led]] - s.guide_margin
+            ids, left = idx[led], guide.distance(new[led])
+            closer = left < trap[ids] - s.guide_margin
             sight = field.obstacles.segments_free(new[led], np.repeat(goal[None, :], int(led.sum()), axis=0))
-            guiding[idx[led][closer & sight]] = False
+            guiding[ids[closer & sight]] = False
+            # A guided point that stops getting closer (it dithers at a corner where the step to the target and
+            # the slide along the obstacle are both blocked, or sits in a gap narrower than the cells resolve,
+            # where the distance is unknown) would stay for good: it walks off and is guided at its next stall.
+            gained = left < guide_best[ids] - 1e-3
+            guide_best[ids] = np.where(gained, left, guide_best[ids])
+            guide_idle[ids] = np.where(gained, 0, guide_idle[ids] + 1)
+            lost = ids[guiding[ids] & (guide_idle[ids] > s.guide_patience)]
+            guiding[lost] = False
+            walking[lost] = s.random_walk
+            walk_age[lost] = 0
+            walks[lost] += 1
         if walk.any():
             moved = new[walk] - here[walk]
             downhill = np.einsum("ij,ij->i", moved, field.velocity(new[walk])) > 0.0
