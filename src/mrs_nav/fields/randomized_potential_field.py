@@ -203,8 +203,10 @@ def roll_out(
             # push added, so that the point slides along the obstacle.
             ahead = cap((guide.downhill(here[led]) - here[led]) / s.dt, field.max_speed)
             direct = field.obstacles.segments_free(here[led], here[led] + s.dt * ahead)
+            near = cap((guide.downhill(here[led], 0) - here[led]) / s.dt, field.max_speed)
+            near_ok = field.obstacles.segments_free(here[led], here[led] + s.dt * near)
             pushed = cap(ahead + field.repulsive(here[led]), field.max_speed)
-            v[led] = np.where(direct[:, None], ahead, pushed)
+            v[led] = np.where(direct[:, None], ahead, np.where(near_ok[:, None], near, pushed))
         proposed = here + s.dt * v
         ok = field.obstacles.segments_free(here, proposed)
         new = np.where(ok[:, None], proposed, here)
