@@ -199,8 +199,9 @@ def roll_out(
         v = cap(uncapped + noise[k, idx], field.max_speed) if s.noise_std > 0 else clean
         v[walk] = field.v_max * np.column_stack([np.cos(heading[idx[walk]]), np.sin(heading[idx[walk]])])
         if guide is not None and led.any():
-            # Towards the wavefront target; where that step is blocked (a corner it would cut), with the obstacles'
-            # push added, so that the point slides along the obstacle.
+            # Towards the wavefront target; where that step is blocked (a corner it would cut), towards the cell the
+            # point sees down the distance, and where even that is blocked, with the obstacles' push added, so that
+            # the point slides along the obstacle.
             ahead = cap((guide.downhill(here[led]) - here[led]) / s.dt, field.max_speed)
             direct = field.obstacles.segments_free(here[led], here[led] + s.dt * ahead)
             near = cap((guide.downhill(here[led], 0) - here[led]) / s.dt, field.max_speed)
