@@ -20,7 +20,8 @@ The point moves by explicit Euler steps ``x[t + dt] = x[t] + v dt`` in one of tw
   :mod:`mrs_nav.fields.navigation_function`: it heads at ``max_speed`` for a point a few cells down the geodesic
   distance to the goal, which has no local minimum, and returns to best first once that distance is
   ``guide_margin`` below the distance at the worst trap so far *and* the goal is in straight sight. The guide
-  never passes a gap the (grown) obstacles close.
+  never passes a gap the (grown) obstacles close; when it says the goal cannot be reached from the start at all
+  (e.g. behind a door narrower than the robot), every seed fails at once with the reason :data:`NO_PATH`.
 
 Steps that would enter an obstacle are refused (the point stays and, in a walk, draws a new heading), so
 the trajectory never crosses an obstacle even where the random walk's speed exceeds the field's.
@@ -48,6 +49,10 @@ from mrs_nav.maps.obstacles import BoolArray
 from mrs_nav.planning import PlanResult, headings_along, path_length
 
 REACHED = "goal reached"
+NO_PATH = (
+    "no path: the obstacles, grown by the robot radius, close the goal off from the start "
+    "(a gap narrower than the robot counts as closed)"
+)
 
 
 @dataclass(frozen=True)
@@ -60,7 +65,8 @@ class EscapeSettings:
     how many stalled steps end a plan when the random walk is off; ``min_walk_steps`` the shortest walk;
     ``walk_angle_std`` (rad) the heading noise of the walk; ``guide_after_walks`` how many random walks a point
     makes before the navigation function takes over at its next stall (``None``: never, the assignment's method), and
-    ``guide_margin`` (m) how much closer to the goal than the trap the guide leads before best first resumes.
+    ``guide_margin`` (m) how much closer to the goal than the trap the guide leads before best first resumes, and
+    ``guide_patience`` how many guided steps without getting 1 mm closer end the guided phase in a random walk.
     """
 
     dt: float = 0.01
@@ -75,6 +81,7 @@ class EscapeSettings:
     walk_angle_std: float = math.pi
     guide_after_walks: int | None = 1
     guide_margin: float = 0.5
+    guide_patience: int = 100
 
     def __post_init__(self) -> None:
         if self.guide_after_walks is not None and self.guide_after_walks < 0:
@@ -85,7 +92,7 @@ class EscapeSettings:
                 raise InvalidInputError(
                     f"{name} must be a finite number {'> 0' if name == 'dt' else '>= 0'}, got {value}"
                 )
-        for name in ("max_steps", "stall_steps", "min_walk_steps"):
+        for name in ("max_steps", "stall_steps", "min_walk_steps", "guide_patience"):
             value = getattr(self, name)
             if value < (0 if name == "min_walk_steps" else 1):
                 raise InvalidInputError(f"{name} must be {'>= 0' if name == 'min_walk_steps' else '>= 1'}, got {value}")
@@ -107,19 +114,39 @@ class Rollout:
     walk_steps: int
 
 
+def navigation_guide(field: PotentialField, start: tuple[float, float]) -> NavigationFunction:
+    """The wavefront guide to the field's goal over the workspace spanned by ``start``, goal and obstacles."""
+    return NavigationFunction(field.obstacles, field.goal, workspace_bounds(field.obstacles, start, field.goal))
+
+
 def roll_out(
     field: PotentialField,
     start: tuple[float, float],
     seeds: Sequence[int],
     settings: EscapeSettings = EscapeSettings(),
+    guide: NavigationFunction | None = None,
 ) -> list[Rollout]:
-    """Simulate the randomised descent from ``start`` once per seed, vectorised over the seeds."""
+    """Simulate the randomised descent from ``start`` once per seed, vectorised over the seeds.
+
+    ``guide`` (built from ``field`` and ``start`` when not given) is used only when ``settings`` turn it on.
+    """
     s = settings
     if any(seed < 0 for seed in seeds):
         raise InvalidInputError(f"seeds must be >= 0, got {min(seeds)}")
     start_xy = np.asarray(start, dtype=np.float64)
     if field.obstacles.contains(start_xy)[0]:
         raise InvalidInputError(f"start ({start[0]}, {start[1]}) is inside an obstacle")
+    goal = np.asarray(field.goal, dtype=np.float64)
+    if s.guide_after_walks is None:
+        guide = None
+    elif guide is None:
+        guide = navigation_guide(field, start)
+    if guide is not None and not guide.reaches_goal(start_xy[None, :])[0]:
+        # Refused before any step: no walk could get there, and the descent must not squeeze through.
+        return [
+            Rollout(int(seed), start_xy[None, :].copy(), np.zeros(0, dtype=bool), False, NO_PATH, 0, 0)
+            for seed in seeds
+        ]
     n = len(seeds)
     noise = np.empty((s.max_steps, n, 2))
     turns = np.empty((s.max_steps, n))
@@ -130,15 +157,11 @@ def roll_out(
         noise[:, i] = rng.normal(0.0, s.noise_std, (s.max_steps, 2)) if s.noise_std > 0 else 0.0
         turns[:, i] = rng.normal(0.0, s.walk_angle_std, s.max_steps)
 
-    goal = np.asarray(field.goal, dtype=np.float64)
-    guide = (
-        NavigationFunction(field.obstacles, field.goal, workspace_bounds(field.obstacles, start_xy, goal))
-        if s.guide_after_walks is not None
-        else None
-    )
     guiding = np.zeros(n, dtype=bool)
     walks = np.zeros(n, dtype=np.int64)
     trap = np.full(n, math.inf)
+    guide_best = np.full(n, math.inf)  # the nearest to the goal (guide's distance) in the current guided phase
+    guide_idle = np.zeros(n, dtype=np.int64)  # guided steps since that improved
     path = np.empty((s.max_steps + 1, n, 2))
     path[0] = start_xy
     walked = np.zeros((s.max_steps, n), dtype=bool)
@@ -163,6 +186,7 @@ def roll_out(
         if guide is not None and s.guide_after_walks is not None:
             handed = fresh & (walks[idx] >= s.guide_after_walks)
             guiding[idx[handed]] = True
+            guide_best[idx[handed]], guide_idle[idx[handed]] = math.inf, 0
             trap[idx[handed]] = np.minimum(trap[idx[handed]], guide.distance(here[handed]))
             fresh &= ~handed
         if s.random_walk:
@@ -175,12 +199,15 @@ def roll_out(
         v = cap(uncapped + noise[k, idx], field.max_speed) if s.noise_std > 0 else clean
         v[walk] = field.v_max * np.column_stack([np.cos(heading[idx[walk]]), np.sin(heading[idx[walk]])])
         if guide is not None and led.any():
-            # Towards the wavefront target; where that step is blocked (a corner it would cut), with the obstacles'
-            # push added, so that the point slides along the obstacle.
+            # Towards the wavefront target; where that step is blocked (a corner it would cut), towards the cell the
+            # point sees down the distance, and where even that is blocked, with the obstacles' push added, so that
+            # the point slides along the obstacle.
             ahead = cap((guide.downhill(here[led]) - here[led]) / s.dt, field.max_speed)
             direct = field.obstacles.segments_free(here[led], here[led] + s.dt * ahead)
+            near = cap((guide.downhill(here[led], 0) - here[led]) / s.dt, field.max_speed)
+            near_ok = field.obstacles.segments_free(here[led], here[led] + s.dt * near)
             pushed = cap(ahead + field.repulsive(here[led]), field.max_speed)
-            v[led] = np.where(direct[:, None], ahead, pushed)
+            v[led] = np.where(direct[:, None], ahead, np.where(near_ok[:, None], near, pushed))
         proposed = here + s.dt * v
         ok = field.obstacles.segments_free(here, proposed)
         new = np.where(ok[:, None], proposed, here)
@@ -190,9 +217,21 @@ def roll_out(
         walked[k, idx[walk | led]] = True
         walk_age[idx[walk]] += 1
         if guide is not None and led.any():
-            closer = guide.distance(new[led]) < trap[idx[led]] - s.guide_margin
+            ids, left = idx[led], guide.distance(new[led])
+            closer = left < trap[ids] - s.guide_margin
             sight = field.obstacles.segments_free(new[led], np.repeat(goal[None, :], int(led.sum()), axis=0))
-            guiding[idx[led][closer & sight]] = False
+            guiding[ids[closer & sight]] = False
+            # A guided point that stops getting closer (it dithers at a corner where the step to the target and
+            # the slide along the obstacle are both blocked, or sits in a gap narrower than the cells resolve,
+            # where the distance is unknown) would stay for good: it walks off and is guided at its next stall.
+            gained = left < guide_best[ids] - 1e-3
+            guide_best[ids] = np.where(gained, left, guide_best[ids])
+            guide_idle[ids] = np.where(gained, 0, guide_idle[ids] + 1)
+            lost = ids[guiding[ids] & (guide_idle[ids] > s.guide_patience)]
+            guiding[lost] = False
+            walking[lost] = s.random_walk
+            walk_age[lost] = 0
+            walks[lost] += 1
         if walk.any():
             moved = new[walk] - here[walk]
             downhill = np.einsum("ij,ij->i", moved, field.velocity(new[walk])) > 0.0
@@ -230,14 +269,31 @@ def roll_out(
     return results
 
 
-def planned_points(field: PotentialField, rollout: Rollout, *, simplify: bool = True) -> FloatArray:
+def planned_points(
+    field: PotentialField, rollout: Rollout, *, simplify: bool = True, guide: NavigationFunction | None = None
+) -> FloatArray:
     """The ``(K, 2)`` waypoints a plan hands on: the rollout's trajectory, ended on the goal when it succeeded
-    (the descent stops ``goal_tolerance`` short of it), then simplified against the field's obstacles."""
+    (the descent stops ``goal_tolerance`` short of it), then simplified against the field's obstacles.
+
+    With a ``guide`` and a successful rollout, the guide's corridor from the start, simplified the same way, is
+    handed on instead when it is collision free and shorter: the descent can take the long way round an obstacle
+    without ever stalling (along a tilted wall past its gap, round the far side of a room), which shortcuts
+    along its own trajectory cannot undo.
+    """
     points = rollout.trajectory
     goal = np.asarray(field.goal, dtype=np.float64)
     if rollout.success and field.obstacles.segments_free(points[-1:], goal[None, :])[0]:
         points = np.vstack([points, goal])
-    return simplify_path(points, field.obstacles.segments_free) if simplify else points
+    if not simplify:
+        return points
+    path = simplify_path(points, field.obstacles.segments_free)
+    corridor = guide.corridor(points[0]) if guide is not None and rollout.success else None
+    if corridor is None:
+        return path
+    shortcut = simplify_path(corridor, field.obstacles.segments_free)
+    if field.obstacles.path_free(shortcut) and path_length(shortcut) < path_length(path):
+        return shortcut
+    return path
 
 
 def plan_potential_field(
@@ -250,12 +306,14 @@ def plan_potential_field(
 ) -> PlanResult:
     """One potential-field plan from ``start`` ``(x, y, yaw)`` to the field's goal.
 
-    The waypoints are :func:`planned_points` of the rollout, each with the heading of the segment leaving it;
-    the first keeps the start's yaw and the last the heading of the segment reaching it.
+    The waypoints are :func:`planned_points` of the rollout (with the guide when ``settings`` use one), each
+    with the heading of the segment leaving it; the first keeps the start's yaw and the last the heading of the
+    segment reaching it.
     """
     began = time.perf_counter()
-    (rollout,) = roll_out(field, (start[0], start[1]), [seed], settings)
-    path = headings_along(planned_points(field, rollout, simplify=simplify))
+    guide = navigation_guide(field, (start[0], start[1])) if settings.guide_after_walks is not None else None
+    (rollout,) = roll_out(field, (start[0], start[1]), [seed], settings, guide)
+    path = headings_along(planned_points(field, rollout, simplify=simplify, guide=guide))
     path[0, 2] = start[2]
     elapsed = time.perf_counter() - began
     return PlanResult(

@@ -109,7 +109,7 @@ def cylinder_cup(
     cup = Obstacles(
         circles=np.column_stack([arc_radius * np.cos(theta), arc_radius * np.sin(theta), np.full(count, radius)])
     )
-    return _trap(f"cup of {count} cylinders (r {arc_radius:g} m, {math.degrees(angle):.0f} deg)", cup, angle, shift)
+    return _trap(f"cup of {count} cylinders (r {arc_radius:.2g} m, {math.degrees(angle):.0f} deg)", cup, angle, shift)
 
 
 def box_u(
@@ -128,7 +128,7 @@ def box_u(
         [0.0, -(half_w + t), 0.0, depth / 2.0 + t, t],
     ]
     return _trap(
-        f"U of boxes ({width:g} x {depth:g} m, {math.degrees(angle):.0f} deg)",
+        f"U of boxes ({width:.2g} x {depth:.2g} m, {math.degrees(angle):.0f} deg)",
         Obstacles(boxes=np.array(boxes)),
         angle,
         shift,
@@ -153,5 +153,53 @@ def wall_with_gap(
         [0.0, (b + hi) / 2.0, 0.0, thickness / 2.0, (hi - b) / 2.0],
     ]
     return _trap(
-        f"wall with a {gap:g} m gap ({math.degrees(angle):.0f} deg)", Obstacles(boxes=np.array(boxes)), angle, shift
+        f"wall with a {gap:.2g} m gap ({math.degrees(angle):.0f} deg)", Obstacles(boxes=np.array(boxes)), angle, shift
     )
+
+
+def room_with_door(
+    door: float = 0.45, *, half_size: float = 0.5, thickness: float = 0.1, angle: float = 0.0
+) -> Scenario:
+    """A square room round the goal, inner half side ``half_size`` m, its only opening a ``door`` m wide in the
+    wall facing the start, the room turned by ``angle`` about the goal. With a door narrower than the robot the
+    goal cannot be reached at all: the right answer is "no path"."""
+    h, t = half_size + thickness / 2.0, thickness / 2.0
+    side = (h + t - door / 2.0) / 2.0  # half length of each piece of the door's wall
+    boxes = [
+        [h, 0.0, 0.0, t, h + t],
+        [0.0, h, 0.0, h + t, t],
+        [0.0, -h, 0.0, h + t, t],
+        [-h, door / 2.0 + side, 0.0, t, side],
+        [-h, -(door / 2.0 + side), 0.0, t, side],
+    ]
+    placed = _placed(Obstacles(boxes=np.array(boxes)), angle, TRAP_GOAL)
+    name = f"room round the goal, {door:.2g} m door ({math.degrees(angle):.0f} deg)"
+    return Scenario(name, placed, TRAP_START, TRAP_GOAL, workspace_bounds(placed, TRAP_START, TRAP_GOAL))
+
+
+def trap_gallery() -> list[Scenario]:
+    """The traps ``tests/core/fields/test_traps.py`` holds the planner to (>= 99 of 100 seeds), all passable."""
+    return [
+        cylinder_cup(3),
+        cylinder_cup(4, arc_radius=0.6, angle=0.4),
+        cylinder_cup(5, arc_radius=0.45, angle=-0.3, shift=(0.1, 0.2)),
+        box_u(),
+        box_u(width=0.7, depth=1.0, angle=0.5, shift=(0.0, -0.2)),
+        box_u(width=1.4, depth=0.6, angle=-0.35),
+        wall_with_gap(0.45),
+        wall_with_gap(0.5, offset=-0.8, angle=0.3),
+        wall_with_gap(0.15, length=2.0),  # too narrow for the robot: it must go round
+        room_with_door(0.45, angle=1.2),  # the door turned away from the start: through it or nowhere
+    ]
+
+
+def random_traps(rng: np.random.Generator) -> list[Scenario]:
+    """One trap of each kind (cup of 3-5 cylinders, U of boxes, wall with one gap, room with a door the robot
+    fits through) with size, orientation and place drawn from ``rng``."""
+    angle, shift = rng.uniform(-0.6, 0.6, 3), rng.uniform(-0.3, 0.3, (3, 2))
+    return [
+        cylinder_cup(int(rng.integers(3, 6)), arc_radius=rng.uniform(0.4, 0.7), angle=angle[0], shift=tuple(shift[0])),
+        box_u(width=rng.uniform(0.6, 1.4), depth=rng.uniform(0.5, 1.1), angle=angle[1], shift=tuple(shift[1])),
+        wall_with_gap(rng.uniform(0.3, 0.6), offset=rng.uniform(-0.9, 0.9), angle=angle[2], shift=tuple(shift[2])),
+        room_with_door(rng.uniform(0.4, 0.6), half_size=rng.uniform(0.4, 0.6), angle=rng.uniform(-math.pi, math.pi)),
+    ]

@@ -1,7 +1,8 @@
-"""The true shortest path for a point between circular obstacles (tangent visibility graph + Dijkstra).
+"""The true shortest path for a point between circles and boxes (tangent visibility graph + Dijkstra).
 
-Among circles, a shortest path is made of straight segments tangent to the circles and arcs along their
-boundaries. The graph holds:
+Among circles and convex polygons, a shortest path is made of straight segments tangent to the circles or
+through box corners, and arcs along the circles' boundaries. A box corner is a circle of radius 0 here, so one
+construction covers both. The graph holds:
 
 - the start, the goal and the tangent points of every start/goal-to-circle tangent: from a point at distance
   ``d > r`` from centre ``c`` the tangent points are ``c + r (cos(phi +- a), sin(phi +- a))`` with ``phi`` the
@@ -13,6 +14,9 @@ boundaries. The graph holds:
 - straight edges (length ``|p - q|``) between those points when the segment crosses no circle, and arc edges
   (length ``r |delta angle|``) between angularly consecutive tangent points of one circle when the arc lies
   outside every other circle (overlapping circles hide parts of each other's boundary).
+
+Every segment and arc is checked against the whole obstacle set, boxes included (a segment along a box's side
+grazes it, which the tolerance allows; one across a box is blocked).
 
 Dijkstra on that graph gives the exact shortest length (up to the tolerance ``1e-9`` m on grazing contacts).
 """
@@ -48,6 +52,8 @@ def _point_tangents(p: FloatArray, circle: FloatArray) -> list[FloatArray]:
     d = math.hypot(*offset)
     if d <= r:
         return []
+    if r == 0.0:
+        return [centre]
     phi, a = math.atan2(offset[1], offset[0]), math.acos(r / d)
     return [centre + r * np.array([math.cos(phi + s * a), math.sin(phi + s * a)]) for s in (1.0, -1.0)]
 
@@ -60,7 +66,8 @@ def _bitangents(c1: FloatArray, c2: FloatArray) -> list[tuple[FloatArray, FloatA
     u = between / dist
     u_perp = np.array([-u[1], u[0]])
     out = []
-    for s in (1.0, -1.0):
+    # With a corner (radius 0) the inner and outer tangents coincide: one sign gives both lines.
+    for s in (1.0, -1.0) if c1[2] > 0.0 and c2[2] > 0.0 else (1.0,):
         m = (s * c2[2] - c1[2]) / dist
         if abs(m) > 1.0:
             continue
@@ -83,26 +90,31 @@ def _arc_outline(circle: FloatArray, start_angle: float, sweep: float) -> FloatA
     return np.asarray(circle[:2] + radius * np.column_stack([np.cos(theta), np.sin(theta)]), dtype=np.float64)
 
 
-def shortest_path(start: tuple[float, float], goal: tuple[float, float], circles: Obstacles) -> ShortestPath:
-    """The shortest path from ``start`` to ``goal`` avoiding the circles of ``circles`` (boxes not allowed).
+def shortest_path(start: tuple[float, float], goal: tuple[float, float], obstacles: Obstacles) -> ShortestPath:
+    """The shortest path from ``start`` to ``goal`` avoiding the circles and boxes of ``obstacles``.
 
-    Raises :class:`InvalidInputError` when an endpoint is inside a circle or boxes are given, and
-    :class:`NoPathFoundError` when the circles enclose an endpoint.
+    Raises :class:`InvalidInputError` when an endpoint is inside an obstacle, and :class:`NoPathFoundError` when
+    the obstacles enclose an endpoint.
     """
-    if circles.boxes.shape[0]:
-        raise InvalidInputError("the exact shortest path handles circles only, not boxes")
-    obs = circles.circles
+    corners = obstacles.box_corners().reshape(-1, 2)
+    obs = np.vstack([obstacles.circles, np.column_stack([corners, np.zeros(len(corners))])])
     a, b = np.asarray(start, dtype=np.float64), np.asarray(goal, dtype=np.float64)
     for name, p in (("start", a), ("goal", b)):
-        if circles.contains(p, -_TOL)[0]:
+        if obstacles.contains(p, -_TOL)[0]:
             raise InvalidInputError(f"{name} ({p[0]}, {p[1]}) is inside an obstacle")
 
     points: list[FloatArray] = [a, b]
     on_circle: list[int] = [-1, -1]
 
+    corner_node: dict[int, int] = {}  # a corner is one node, whichever tangent reaches it
+
     def add(p: FloatArray, circle: int) -> int:
+        if obs[circle, 2] == 0.0 and circle in corner_node:
+            return corner_node[circle]
         points.append(p)
         on_circle.append(circle)
+        if obs[circle, 2] == 0.0:
+            corner_node[circle] = len(points) - 1
         return len(points) - 1
 
     segments: list[tuple[int, int]] = [(0, 1)]
@@ -116,9 +128,9 @@ def shortest_path(start: tuple[float, float], goal: tuple[float, float], circles
     xy = np.array(points)
     edges: list[list[tuple[int, float]]] = [[] for _ in points]
     pairs = np.array(segments)
-    free = circles.segments_free(xy[pairs[:, 0]], xy[pairs[:, 1]], clearance=-_TOL)
+    free = obstacles.segments_free(xy[pairs[:, 0]], xy[pairs[:, 1]], clearance=-_TOL)
     # A bitangent may touch a circle only where it is tangent: tangent points inside another circle are hidden.
-    visible = ~circles.contains(xy, -_TOL * 1e3)
+    visible = ~obstacles.contains(xy, -_TOL * 1e3)
     visible[:2] = True
     for (p, q), ok in zip(pairs, free, strict=True):
         if ok and visible[p] and visible[q]:
@@ -127,7 +139,7 @@ def shortest_path(start: tuple[float, float], goal: tuple[float, float], circles
             edges[q].append((p, length))
 
     arcs: dict[tuple[int, int], tuple[int, float, float]] = {}
-    for i, circle in enumerate(obs):
+    for i, circle in enumerate(obstacles.circles):
         members = [k for k, c in enumerate(on_circle) if c == i and visible[k]]
         if len(members) < 2:
             continue
@@ -141,7 +153,7 @@ def shortest_path(start: tuple[float, float], goal: tuple[float, float], circles
                 continue
             theta = t1 + sweep * np.linspace(0.0, 1.0, _ARC_SAMPLES)[1:-1]
             arc = circle[:2] + circle[2] * np.column_stack([np.cos(theta), np.sin(theta)])
-            if circles.contains(arc, -_TOL * 1e3).any():
+            if obstacles.contains(arc, -_TOL * 1e3).any():
                 continue
             length = float(circle[2] * sweep)
             edges[k1].append((k2, length))
@@ -165,7 +177,7 @@ def shortest_path(start: tuple[float, float], goal: tuple[float, float], circles
                 before[nxt] = node
                 heapq.heappush(queue, (cost + length, nxt))
     if not math.isfinite(best[1]):
-        raise NoPathFoundError(f"no path from {tuple(start)} to {tuple(goal)} between the circles")
+        raise NoPathFoundError(f"no path from {tuple(start)} to {tuple(goal)} between the obstacles")
 
     chain = [1]
     while chain[-1] != 0:

@@ -106,3 +106,5 @@ def test_bad_requests_are_refused() -> None:
         EscapeSettings(dt=0.0)
     with pytest.raises(InvalidInputError, match="max_steps"):
         EscapeSettings(max_steps=0)
+    with pytest.raises(InvalidInputError, match="guide_patience"):
+        EscapeSettings(guide_patience=0)

@@ -1,4 +1,4 @@
-"""The exact shortest path among circles (tangent graph), the yardstick of the simplified paths."""
+"""The exact shortest path among circles and boxes (tangent graph), the yardstick of the simplified paths."""
 
 from __future__ import annotations
 
@@ -58,5 +58,36 @@ def test_enclosed_goal_and_bad_endpoints_are_errors() -> None:
         shortest_path((3.0, 0.0), (0.0, 0.0), Obstacles.from_circles(ring))
     with pytest.raises(InvalidInputError, match="start"):
         shortest_path((1.0, 0.0), (3.0, 0.0), Obstacles.from_circles(ring))
-    with pytest.raises(InvalidInputError, match="circles only"):
-        shortest_path((3.0, 0.0), (4.0, 0.0), Obstacles(boxes=np.array([[0.0, 0.0, 0.0, 1.0, 1.0]])))
+    room = Obstacles(boxes=np.array([[0.0, 1.0, 0.0, 1.1, 0.1], [0.0, -1.0, 0.0, 1.1, 0.1], [1.0, 0.0, 0.0, 0.1, 1.1]]))
+    with pytest.raises(NoPathFoundError):
+        shortest_path((0.0, 0.0), (3.0, 0.0), Obstacles(boxes=np.vstack([room.boxes, [[-1.0, 0.0, 0.0, 0.1, 1.1]]])))
+    with pytest.raises(InvalidInputError, match="goal"):
+        shortest_path((3.0, 0.0), (1.0, 0.5), room)
+
+
+def test_around_a_box_it_follows_the_near_side_between_two_corners() -> None:
+    box = Obstacles(boxes=np.array([[0.0, 0.0, 0.0, 0.5, 0.5]]))
+    result = shortest_path((-1.5, 0.0), (1.5, 0.0), box)
+    assert result.length_m == pytest.approx(2.0 * math.hypot(1.0, 0.5) + 1.0, rel=1e-12)
+    assert box.path_free(result.points, clearance=-1e-6)
+    assert path_length(result.points) == pytest.approx(result.length_m)
+
+
+def test_a_rotated_box_is_passed_over_its_corner() -> None:
+    diamond = Obstacles(boxes=np.array([[0.0, 0.0, math.pi / 4, 0.5, 0.5]]))
+    result = shortest_path((-1.5, 0.0), (1.5, 0.0), diamond)
+    assert result.length_m == pytest.approx(2.0 * math.hypot(1.5, 0.5 * math.sqrt(2.0)), rel=1e-9)
+
+
+def test_a_u_of_boxes_with_a_cylinder_beside_it_gives_a_free_path_no_longer_than_a_free_detour() -> None:
+    u = np.array([[0.45, 0.0, 0.0, 0.05, 0.6], [0.0, 0.55, 0.0, 0.5, 0.05], [0.0, -0.55, 0.0, 0.5, 0.05]])
+    obstacles = Obstacles(circles=np.array([[0.0, 0.9, 0.2]]), boxes=u)
+    start, goal = (0.0, 0.0), (1.5, 0.0)  # from inside the U out to behind its back
+    result = shortest_path(start, goal, obstacles)
+    assert obstacles.path_free(result.points, clearance=-1e-6)
+    around = np.array([start, (-0.7, 0.0), (-0.7, -0.8), (1.5, -0.8), goal])
+    assert obstacles.path_free(around)
+    assert result.length_m <= path_length(around)
+    # it has to leave by the mouth (x < -0.5) and come round a corner of the U
+    assert result.points[:, 0].min() <= -0.5 + 1e-9
+    assert result.length_m >= 2.0 * 0.5 + 1.5
