@@ -114,7 +114,8 @@ class SlamNode:
             with self._lock:
                 if self._slam is None:
                     # The first usable scan's frame is the laser's; others are mapped with their own mounting.
-                    self._slam = Slam(self.config.slam, mounting)
+                    # The node publishes the map and the correction; a kept trajectory would grow with every scan.
+                    self._slam = Slam(self.config.slam, mounting, keep_trajectory=False)
                     self._last_map_time = -math.inf
                 done = self._slam.add_scan(odom, scan, stamp, laser_pose=mounting)
         except MrsNavError as err:

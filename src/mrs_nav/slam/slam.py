@@ -4,14 +4,23 @@ Each processed scan is predicted from odometry, aligned to the map built so far 
 and added to it (:mod:`mrs_nav.slam.grid`). Scans are processed only when the robot has moved or turned enough
 or enough time has passed (gmapping's ``linearUpdate``, ``angularUpdate``, ``temporalUpdate``).
 
-Loop closure (``loop_closure``): every processed scan is a node of a pose graph (:mod:`mrs_nav.slam.posegraph`)
-linked to the previous one by its matched motion. Every :data:`LOOP_EVERY_M` of travel, the scan is matched
-against a submap of the scans taken near the closest older pose that is at least :data:`LOOP_MIN_TRAVEL_M` of
-travel back (within :data:`LOOP_RADIUS_M`), with a wide search and no odometry prior. A match that explains
-at least :data:`LOOP_MIN_INLIERS` of the scan's points is a candidate edge; the graph is optimised with it and
-the edge kept only if every edge then agrees within the gate (else it is rejected as a false candidate). When
-the optimisation moved poses by more than half a cell, the map is rebuilt from the corrected poses, and
-``map -> odom`` follows the corrected latest pose.
+Keyframes: memory and work are bounded by the mapped extent, not by time. A processed scan becomes a node of a
+pose graph (:mod:`mrs_nav.slam.posegraph`), keeping its beams, only where no node is already within
+:data:`KEYFRAME_RADIUS_M` and :data:`KEYFRAME_HEADING_RAD` of its matched pose; a scan in a covered place is
+still matched against the map and integrated into it (pose and ``map -> odom`` stay corrected) but not stored.
+Consecutive nodes are linked by the relative pose of their matched poses. With ``keep_trajectory`` (replay,
+evaluation) every processed scan is also remembered, as a pose relative to its nearest node, so the whole
+trajectory follows loop closures; the live stack and node keep only the graph.
+
+Loop closure (``loop_closure``): every :data:`LOOP_EVERY_M` of travel while the graph is growing (the scan is a
+new node, or the last node is at most :data:`LOOP_GROWING_M` of travel back), the scan is matched against a
+submap of the nodes taken near the closest older node that is at least :data:`LOOP_MIN_TRAVEL_M` of travel back
+(within :data:`LOOP_RADIUS_M`), with a wide search and no odometry prior; a scan that closes a loop becomes a
+node. Once the robot only drives where nodes are, the map it matches against already holds the loop. A match
+that explains at least :data:`LOOP_MIN_INLIERS` of the scan's points is a candidate edge; the graph is optimised
+with it and the edge kept only if every edge then agrees within the gate (else it is rejected as a false
+candidate). When the optimisation moved poses by more than half a cell, the map is rebuilt from the nodes'
+corrected poses, and ``map -> odom`` follows the corrected latest pose.
 
 Frames: ``map`` is the frame of the first processed pose's odometry (``map -> odom`` starts as identity);
 ``odom`` is the odometry frame; poses of the robot are of its base frame; ``laser_pose`` is base -> laser.
@@ -50,6 +59,12 @@ SEQUENTIAL_SIGMA = (0.03, math.radians(1.0))  # m, rad: scan-to-map matched moti
 LOOP_SIGMA = (0.05, math.radians(1.5))  # m, rad: a verified loop match
 LOOP_AFTER_CLOSURE_M = 3.0  # m of travel after a closure before the next attempt (the map there is fresh)
 REBUILD_AFTER_CELLS = 2.0  # rebuild the map once a pose it was built from is this many cells off
+# A node per place and heading, at the update gates' scale (linearUpdate, angularUpdate 0.2): while exploring,
+# every processed scan (0.2 m or 0.2 rad apart) is still a node; the heading tolerance is wider because the
+# laser sees all round, so the same place crossed in another direction rarely needs another node.
+KEYFRAME_RADIUS_M = 0.15  # m
+KEYFRAME_HEADING_RAD = math.radians(30.0)
+LOOP_GROWING_M = 2.0 * LOOP_EVERY_M  # m of travel after the last new node in which loops are still sought
 
 
 @dataclass(frozen=True)
@@ -66,10 +81,27 @@ class ProcessedScan:
     travelled: float = 0.0  # m of path from the first processed scan (by the estimate)
 
 
+@dataclass(frozen=True)
+class _Tracked:
+    """A processed scan of the trajectory: its pose relative to node ``node`` of the graph (its own when it is
+    that node), so that it follows the node when a loop closure corrects it."""
+
+    stamp: float
+    node: int
+    is_node: bool
+    relative: Pose2D
+    odom: Pose2D
+    match: MatchResult | None
+    laser_pose: Pose2D
+    travelled: float
+
+
 class Slam:
     """Online 2-D SLAM over (odometry pose, laser scan) pairs."""
 
-    def __init__(self, config: SlamConfig | None = None, laser_pose: Pose2D | None = None) -> None:
+    def __init__(
+        self, config: SlamConfig | None = None, laser_pose: Pose2D | None = None, *, keep_trajectory: bool = True
+    ) -> None:
         self.config = config or SlamConfig()
         self.laser_pose = laser_pose or Pose2D(0.0, 0.0, 0.0)
         c = self.config
@@ -83,13 +115,31 @@ class Slam:
             max_cells=MAX_MAP_CELLS,
         )
         self.matcher = ScanMatcher(c.sigma, c.search_linear, c.search_angular)
-        self.processed: list[ProcessedScan] = []
+        self.nodes: list[ProcessedScan] = []  # the pose graph's nodes (keyframes), with their beams
         self.edges: list[Edge] = []
+        self.last: ProcessedScan | None = None  # the latest processed scan
+        self.keep_trajectory = keep_trajectory
+        self._trajectory: list[_Tracked] = []
         self.loops_closed = 0
         self.loops_rejected = 0
         self._last_loop_attempt = 0.0
-        self._mapped: list[Pose2D] = []  # the pose each processed scan was mapped at
+        self._mapped: list[Pose2D] = []  # the pose each node was mapped at
         self._map_to_odom = Pose2D(0.0, 0.0, 0.0)
+
+    @property
+    def processed(self) -> list[ProcessedScan]:
+        """Every processed scan at its corrected pose (beams only on nodes); only the nodes when the trajectory
+        is not kept."""
+        if not self.keep_trajectory:
+            return list(self.nodes)
+        out = []
+        for t in self._trajectory:
+            if t.is_node:
+                out.append(self.nodes[t.node])
+            else:
+                pose = self.nodes[t.node].pose.compose(t.relative)
+                out.append(ProcessedScan(t.stamp, pose, t.odom, t.match, t.laser_pose, None, t.travelled))
+        return out
 
     @property
     def map_to_odom(self) -> Pose2D:
@@ -102,9 +152,9 @@ class Slam:
 
     def wants(self, odom: Pose2D, stamp: float) -> bool:
         """Whether a scan at this odometry pose and time passes the update gates."""
-        if not self.processed:
+        last = self.last
+        if last is None:
             return True
-        last = self.processed[-1]
         c = self.config
         moved = odom.relative_to(last.odom)
         if math.hypot(moved.x, moved.y) >= c.linearUpdate or abs(moved.yaw) >= c.angularUpdate:
@@ -132,36 +182,67 @@ class Slam:
             )
         match = None
         points = _points(beams)
-        if self.processed and points.shape[0] >= MIN_POINTS:
+        if self.last is not None and points.shape[0] >= MIN_POINTS:
             sensor_prior = predicted.compose(mount)
-            match = self._match(points, sensor_prior, self._spread(odom))
+            match = self._match(points, sensor_prior, self._spread(odom, self.last))
             pose = match.pose.compose(mount.inverse())
         else:
             pose = predicted
         self.grid.integrate(pose.compose(mount), beams)
-        self._mapped.append(pose)
         self._map_to_odom = pose.compose(odom.inverse())
-        travelled = 0.0
-        if self.processed:
-            last = self.processed[-1]
-            step = pose.relative_to(last.pose)
-            travelled = last.travelled + math.hypot(step.x, step.y)
-            self.edges.append(Edge(len(self.processed) - 1, len(self.processed), step, *SEQUENTIAL_SIGMA))
+        last = self.last
+        travelled = 0.0 if last is None else last.travelled + math.hypot(pose.x - last.pose.x, pose.y - last.pose.y)
         record = ProcessedScan(stamp, pose, odom, match, mount, StoredBeams.of(beams), travelled)
-        self.processed.append(record)
-        if c.loop_closure and travelled - self._last_loop_attempt >= LOOP_EVERY_M:
+        nearest = self._nearest_node(pose)
+        if nearest is None:
+            self._add_node(record)
+        else:
+            self._track(record, nearest)
+        self.last = record
+        growing = bool(self.nodes) and travelled - self.nodes[-1].travelled <= LOOP_GROWING_M
+        if c.loop_closure and growing and travelled - self._last_loop_attempt >= LOOP_EVERY_M:
             self._last_loop_attempt = travelled
-            self._try_loop(points)
-        return self.processed[-1]
+            self._try_loop(record, points)
+        return self.last
 
-    def _try_loop(self, points: FloatArray) -> None:
+    def _nearest_node(self, pose: Pose2D) -> int | None:
+        """The nearest node within the keyframe radius and heading of ``pose``, or None when the place is new."""
+        if not self.nodes:
+            return None
+        xy = np.array([(n.pose.x, n.pose.y, n.pose.yaw) for n in self.nodes], dtype=np.float64)
+        distance = np.hypot(xy[:, 0] - pose.x, xy[:, 1] - pose.y)
+        turned = np.abs(np.remainder(xy[:, 2] - pose.yaw + math.pi, math.tau) - math.pi)
+        distance[(distance >= KEYFRAME_RADIUS_M) | (turned >= KEYFRAME_HEADING_RAD)] = np.inf
+        best = int(np.argmin(distance))
+        return best if math.isfinite(distance[best]) else None
+
+    def _add_node(self, record: ProcessedScan) -> None:
+        """Make ``record`` a graph node linked to the previous node by their matched poses' relative pose."""
+        k = len(self.nodes)
+        if k:
+            self.edges.append(Edge(k - 1, k, record.pose.relative_to(self.nodes[-1].pose), *SEQUENTIAL_SIGMA))
+        self.nodes.append(record)
+        self._mapped.append(record.pose)
+        self._track(record, k)
+
+    def _track(self, record: ProcessedScan, node: int) -> None:
+        """Remember ``record`` in the trajectory, relative to ``node``, when the trajectory is kept."""
+        if not self.keep_trajectory:
+            return
+        is_node = self.nodes[node] is record
+        relative = record.pose.relative_to(self.nodes[node].pose)
+        self._trajectory.append(
+            _Tracked(
+                record.stamp, node, is_node, relative, record.odom, record.match, record.laser_pose, record.travelled
+            )
+        )
+
+    def _try_loop(self, current: ProcessedScan, points: FloatArray) -> None:
         """Look for a loop closure of the latest scan (module doc); optimise and rebuild when one holds."""
-        k = len(self.processed) - 1
-        current = self.processed[k]
         thinned = thin_points(points, self.config.delta)
         if thinned.shape[0] < LOOP_MIN_POINTS:
             return
-        old = [r for r in self.processed[:k] if current.travelled - r.travelled >= LOOP_MIN_TRAVEL_M]
+        old = [r for r in self.nodes if current.travelled - r.travelled >= LOOP_MIN_TRAVEL_M]
         if not old:
             return
         nearest = min(old, key=lambda r: math.hypot(r.pose.x - current.pose.x, r.pose.y - current.pose.y))
@@ -178,26 +259,42 @@ class Slam:
             or _weakest_constraint(field, thinned, match.pose) < LOOP_MIN_SPREAD
         ):
             return
-        j = self.processed.index(nearest)
+        j = self.nodes.index(nearest)
+        is_node = self.nodes[-1] is current
+        k = len(self.nodes) - 1 if is_node else len(self.nodes)
+        poses = [r.pose for r in self.nodes] + ([] if is_node else [current.pose])
+        edges = self.edges
+        if not is_node:
+            edges = [*edges, Edge(k - 1, k, current.pose.relative_to(self.nodes[-1].pose), *SEQUENTIAL_SIGMA)]
         found = match.pose.compose(current.laser_pose.inverse())
         edge = Edge(j, k, found.relative_to(nearest.pose), *LOOP_SIGMA)
-        closed = close_loop([r.pose for r in self.processed], self.edges, edge)
+        closed = close_loop(poses, edges, edge)
         if closed is None:
             self.loops_rejected += 1
             return
+        if not is_node:
+            # The scan that closes the loop becomes a node: it is the loop edge's end.
+            self.edges.append(edges[-1])
+            self.nodes.append(current)
+            self._mapped.append(current.pose)
+            if self.keep_trajectory:
+                self._trajectory[-1] = dataclasses.replace(
+                    self._trajectory[-1], node=k, is_node=True, relative=Pose2D(0.0, 0.0, 0.0)
+                )
         self.loops_closed += 1
         self._last_loop_attempt = current.travelled + LOOP_AFTER_CLOSURE_M - LOOP_EVERY_M
         self.edges.append(edge)
-        self.processed = [dataclasses.replace(r, pose=p) for r, p in zip(self.processed, closed.poses, strict=True)]
-        self._map_to_odom = self.processed[-1].pose.compose(self.processed[-1].odom.inverse())
-        # Smaller corrections are within what the matcher tolerates; rebuilding costs a pass over every scan.
+        self.nodes = [dataclasses.replace(r, pose=p) for r, p in zip(self.nodes, closed.poses, strict=True)]
+        self.last = self.nodes[-1]
+        self._map_to_odom = self.last.pose.compose(self.last.odom.inverse())
+        # Smaller corrections are within what the matcher tolerates; rebuilding costs a pass over every node.
         if self.map_lag() > REBUILD_AFTER_CELLS * self.config.delta:
             self.rebuild_map()
 
     def map_lag(self) -> float:
         """How far (m) the poses the map was built from are, at most, from the current estimates."""
         return max(
-            (math.hypot(m.x - r.pose.x, m.y - r.pose.y) for m, r in zip(self._mapped, self.processed, strict=True)),
+            (math.hypot(m.x - r.pose.x, m.y - r.pose.y) for m, r in zip(self._mapped, self.nodes, strict=True)),
             default=0.0,
         )
 
@@ -224,17 +321,17 @@ class Slam:
         return matcher.match(field, points, prior, (1e3, 1e3)), field
 
     def rebuild_map(self) -> None:
-        """Map every processed scan again at its (corrected) pose."""
+        """Map every node's scan again at its (corrected) pose."""
         self.grid.clear()
-        for record in self.processed:
+        for record in self.nodes:
             if record.beams is not None:
                 self.grid.integrate(record.pose.compose(record.laser_pose), record.beams.split())
-        self._mapped = [r.pose for r in self.processed]
+        self._mapped = [r.pose for r in self.nodes]
 
-    def _spread(self, odom: Pose2D) -> tuple[float, float]:
-        """Standard deviations (m, rad) of the odometry prediction since the last processed scan."""
+    def _spread(self, odom: Pose2D, last: ProcessedScan) -> tuple[float, float]:
+        """Standard deviations (m, rad) of the odometry prediction since the ``last`` processed scan."""
         c = self.config
-        moved = odom.relative_to(self.processed[-1].odom)
+        moved = odom.relative_to(last.odom)
         travelled, turned = math.hypot(moved.x, moved.y), abs(moved.yaw)
         return (
             MIN_SPREAD_M + c.srr * travelled + c.srt * turned,

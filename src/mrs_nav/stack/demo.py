@@ -20,6 +20,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -46,6 +47,8 @@ matplotlib.use("Agg")  # headless: figures are files, never windows
 import matplotlib.pyplot as plt
 
 from mrs_nav.resources import CONFIG_DIR
+
+MAX_PATHS_KEPT = 500  # adopted plans kept for the figure (a demo's few goals adopt far fewer)
 
 
 def node_slam_config() -> SlamConfig:
@@ -174,7 +177,8 @@ class Demo:
         sim_config = sim_config or SimulatorConfig(odom_noise=config.odom_noise, seed=config.seed)
         self.sim = Simulator(world, sim_config, config.start)
         laser = self.sim.config.laser
-        self.slam = Slam(config.slam, Pose2D(laser.mount_x, laser.mount_y, 0.0))
+        # The live stack needs the map and the correction only; a kept trajectory would grow with every scan.
+        self.slam = Slam(config.slam, Pose2D(laser.mount_x, laser.mount_y, 0.0), keep_trajectory=False)
         planner = rrt_planner(config.planner, config.plan_time_budget_s, config.plan_iterations)
         self.navigator = Navigator(planner, config.navigator, seed=config.seed)
         # True and estimated pose per control tick (x, y, yaw, x, y, yaw) and the cross-track distance, in bounded
@@ -186,7 +190,8 @@ class Demo:
         self._travelled = 0.0  # m
         self._squared_error = 0.0  # m^2, summed over the control ticks
         self._ticks = 0
-        self._paths: list[FloatArray] = []
+        # The latest adopted plans, for the figure; a soak replans for hours, so older ones are let go.
+        self._paths: deque[FloatArray] = deque(maxlen=MAX_PATHS_KEPT)
         self._last_map = -math.inf
 
     def pose_estimate(self) -> Pose2D:
