@@ -16,6 +16,7 @@ scripted 47 m loop with the core simulator (360-beam scans, 1 % wheel odometry n
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import resource
 import sys
@@ -201,10 +202,11 @@ def _intel(args: argparse.Namespace) -> str:
         f"windows of {ATE_WINDOW} consecutive scans the two trajectories agree to {local_ate:.3f} m (median): "
         "the rest of the ATE is the building's global shape differing between two SLAM outputs, of which the "
         f"corrected log scores {scored['relations_reference_trans_mean_m']:.4f} m on the relations and this "
-        f"trajectory {trans:.4f} m. Of the ATE, {affine.residual_rms_m:.3f} m is left after the best affine map "
-        f"of this trajectory onto the corrected one (stretches {affine.stretch_min:.4f} and "
-        f"{affine.stretch_max:.4f}): the rest is one linear deformation of the building between the two, which "
-        "loop closure cannot see. The scans arbitrate: end points of scans taken at least "
+        f"trajectory {trans:.4f} m. The best affine map of this trajectory onto the corrected one leaves "
+        f"{affine.residual_rms_m:.3f} m (stretches {affine.stretch_min:.4f} and {affine.stretch_max:.4f}): "
+        f"{math.sqrt(max(summary['ate_rmse_m'] ** 2 - affine.residual_rms_m**2, 0.0)):.3f} m RMS of the ATE is one "
+        "linear deformation of the building between the two, which loop closure cannot see. The scans arbitrate: "
+        "end points of scans taken at least "
         f"{REVISIT_GAP} scans apart lie {spread * 1000.0:.1f} mm (median) from each other with this trajectory "
         f"and {spread_reference * 1000.0:.1f} mm with the corrected poses, so where the two differ the scans "
         f"agree {'better with this trajectory' if spread <= spread_reference else 'better with the corrected log'}."

@@ -13,18 +13,14 @@ evaluation) every processed scan is also remembered, as a pose relative to its n
 trajectory follows loop closures; the live stack and node keep only the graph.
 
 Loop closure (``loop_closure``): every :data:`LOOP_EVERY_M` of travel while the graph is growing (the scan is a
-new node, or the last node made for a new place is at most :data:`LOOP_GROWING_M` of travel back), the scan is
-matched against a submap of the nodes taken near the closest older node that is at least
-:data:`LOOP_MIN_TRAVEL_M` of travel back (within :data:`LOOP_RADIUS_M`), with a wide search and no odometry
-prior; a scan that closes a loop becomes a node (not one for a new place). Once the robot only drives where
-nodes are, the map it matches against already holds the loop.
-Attempts go on at the same pace after a closure, so a revisit of an old corridor is tied to it by an edge every
-metre rather than by one edge at its start, which leaves the rest of the revisit to the sequential chain (with a
-pause of 3 m after each closure the Intel graph held half the loop edges, 60 against 120, and its scans agreed
-less well at revisits). A match that explains at least :data:`LOOP_MIN_INLIERS` of the scan's points is a
-candidate edge; the graph is optimised with it and the edge kept only if every edge then agrees within the gate
-(else it is rejected as a false candidate). When the optimisation moved poses by more than half a cell, the map
-is rebuilt from the nodes' corrected poses, and ``map -> odom`` follows the corrected latest pose.
+new node, or the last node is at most :data:`LOOP_GROWING_M` of travel back), the scan is matched against a
+submap of the nodes taken near the closest older node that is at least :data:`LOOP_MIN_TRAVEL_M` of travel back
+(within :data:`LOOP_RADIUS_M`), with a wide search and no odometry prior; a scan that closes a loop becomes a
+node. Once the robot only drives where nodes are, the map it matches against already holds the loop. A match
+that explains at least :data:`LOOP_MIN_INLIERS` of the scan's points is a candidate edge; the graph is optimised
+with it and the edge kept only if every edge then agrees within the gate (else it is rejected as a false
+candidate). When the optimisation moved poses by more than half a cell, the map is rebuilt from the nodes'
+corrected poses, and ``map -> odom`` follows the corrected latest pose.
 
 Frames: ``map`` is the frame of the first processed pose's odometry (``map -> odom`` starts as identity);
 ``odom`` is the odometry frame; poses of the robot are of its base frame; ``laser_pose`` is base -> laser.
@@ -61,6 +57,7 @@ LOOP_MIN_SPREAD = 0.1  # weakest-direction constraint of a loop match (see _weak
 LOOP_MIN_POINTS = 40  # thinned points at least: a scan of a bare corridor end proves nothing
 SEQUENTIAL_SIGMA = (0.03, math.radians(1.0))  # m, rad: scan-to-map matched motion between processed scans
 LOOP_SIGMA = (0.05, math.radians(1.5))  # m, rad: a verified loop match
+LOOP_AFTER_CLOSURE_M = 3.0  # m of travel after a closure before the next attempt (the map there is fresh)
 REBUILD_AFTER_CELLS = 2.0  # rebuild the map once a pose it was built from is this many cells off
 # A node per place and heading, at the update gates' scale (linearUpdate, angularUpdate 0.2): while exploring,
 # every processed scan (0.2 m or 0.2 rad apart) is still a node; the heading tolerance is wider because the
@@ -127,9 +124,6 @@ class Slam:
         self.loops_rejected = 0
         self._last_loop_attempt = 0.0
         self._mapped: list[Pose2D] = []  # the pose each node was mapped at
-        # Travel (m) at the last node made for a new place; nodes that close loops do not count, or each
-        # closure would keep the search going on a robot that only drives known places.
-        self._explored_at = 0.0
         self._map_to_odom = Pose2D(0.0, 0.0, 0.0)
 
     @property
@@ -205,7 +199,7 @@ class Slam:
         else:
             self._track(record, nearest)
         self.last = record
-        growing = travelled - self._explored_at <= LOOP_GROWING_M
+        growing = bool(self.nodes) and travelled - self.nodes[-1].travelled <= LOOP_GROWING_M
         if c.loop_closure and growing and travelled - self._last_loop_attempt >= LOOP_EVERY_M:
             self._last_loop_attempt = travelled
             self._try_loop(record, points)
@@ -229,7 +223,6 @@ class Slam:
             self.edges.append(Edge(k - 1, k, record.pose.relative_to(self.nodes[-1].pose), *SEQUENTIAL_SIGMA))
         self.nodes.append(record)
         self._mapped.append(record.pose)
-        self._explored_at = record.travelled
         self._track(record, k)
 
     def _track(self, record: ProcessedScan, node: int) -> None:
@@ -289,6 +282,7 @@ class Slam:
                     self._trajectory[-1], node=k, is_node=True, relative=Pose2D(0.0, 0.0, 0.0)
                 )
         self.loops_closed += 1
+        self._last_loop_attempt = current.travelled + LOOP_AFTER_CLOSURE_M - LOOP_EVERY_M
         self.edges.append(edge)
         self.nodes = [dataclasses.replace(r, pose=p) for r, p in zip(self.nodes, closed.poses, strict=True)]
         self.last = self.nodes[-1]
