@@ -85,3 +85,30 @@ def windowed_ate(estimate: Sequence[Pose2D], truth: Sequence[Pose2D], window: in
         aligned = np.stack([c * e[:, 0] - s * e[:, 1] + shift[0], s * e[:, 0] + c * e[:, 1] + shift[1]], axis=1)
         errors.append(math.sqrt(float(np.mean(np.sum((aligned - t) ** 2, axis=1)))))
     return float(np.median(errors))
+
+
+@dataclass(frozen=True)
+class AffineFit:
+    """How much of the difference between two trajectories is one linear deformation of the plane: the RMS
+    position error (m) left after the least-squares affine map of the estimate onto the truth, and that map's
+    principal stretches (its singular values: 1.0 and 1.0 for a rigid motion)."""
+
+    residual_rms_m: float
+    stretch_min: float
+    stretch_max: float
+
+
+def affine_fit(estimate: Sequence[Pose2D], truth: Sequence[Pose2D]) -> AffineFit:
+    """The affine part of the ATE (:class:`AffineFit`). A global scale or shear between two maps of the same
+    building (e.g. one built with a wheel-scale bias along its corridors) shows as stretches away from 1 and a
+    residual well below the ATE; loop closure cannot see such a deformation, scans seen from afar can."""
+    if len(estimate) != len(truth) or len(estimate) < 3:
+        raise InvalidInputError(f"an affine fit needs >= 3 matched poses, got {len(estimate)} and {len(truth)}")
+    est = np.array([[p.x, p.y, 1.0] for p in estimate])
+    gt = np.array([[p.x, p.y] for p in truth])
+    solution, *_ = np.linalg.lstsq(est, gt, rcond=None)
+    residual = est @ solution - gt
+    stretches = np.linalg.svd(solution[:2], compute_uv=False)
+    return AffineFit(
+        float(np.sqrt(np.mean(np.sum(residual**2, axis=1)))), float(stretches.min()), float(stretches.max())
+    )

@@ -6,7 +6,7 @@ from hypothesis import strategies as st
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
-from mrs_nav.slam.metrics import trajectory_errors, windowed_ate
+from mrs_nav.slam.metrics import affine_fit, trajectory_errors, windowed_ate
 
 TRUTH = [Pose2D(0.1 * i, 0.05 * i * i, 0.1 * i) for i in range(20)]
 
@@ -45,3 +45,25 @@ def test_windowed_ate_sees_local_agreement_that_a_bend_hides_from_the_global_ate
     assert windowed_ate(estimate, truth, window=10) == pytest.approx(0.0, abs=1e-9)
     with pytest.raises(InvalidInputError, match="windowed ATE"):
         windowed_ate(estimate[:5], truth[:5], window=10)
+
+
+def test_affine_fit_takes_a_stretched_building_as_one_deformation():
+    # A 20 m x 10 m loop the estimate stretches by 1 % along x and moves rigidly: an ATE of centimetres that an
+    # affine map removes entirely, with the stretches read back.
+    truth = [Pose2D(x, y, 0.0) for x in range(21) for y in (0.0, 10.0)]
+    moved = Pose2D(3.0, -2.0, 0.4)
+    estimate = [moved.compose(Pose2D(1.01 * p.x, p.y, 0.0)) for p in truth]
+    fit = affine_fit(estimate, truth)
+    assert trajectory_errors(estimate, truth).ate_rmse_m > 0.02
+    assert fit.residual_rms_m == pytest.approx(0.0, abs=1e-9)
+    # The fit maps the estimate onto the truth: it undoes the stretch along x and keeps y.
+    assert fit.stretch_min == pytest.approx(1 / 1.01, rel=1e-9)
+    assert fit.stretch_max == pytest.approx(1.0, rel=1e-9)
+
+
+def test_affine_fit_leaves_a_local_error_in_place():
+    truth = [Pose2D(0.5 * i, 0.1 * (i % 7), 0.0) for i in range(40)]
+    estimate = [Pose2D(p.x, p.y + (0.3 if i == 20 else 0.0), 0.0) for i, p in enumerate(truth)]
+    assert affine_fit(estimate, truth).residual_rms_m > 0.03
+    with pytest.raises(InvalidInputError, match="affine fit"):
+        affine_fit(truth[:2], truth[:2])

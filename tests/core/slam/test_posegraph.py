@@ -3,6 +3,8 @@
 import itertools
 import math
 
+import pytest
+
 from mrs_nav.geometry import Pose2D
 from mrs_nav.slam.posegraph import Edge, close_loop
 
@@ -55,3 +57,21 @@ def test_a_wrong_loop_edge_is_outvoted():
         poses, edges = closed.poses, [*edges, edge]
     assert close_loop(poses, edges, wrong) is None
     assert error(poses, truth) < 0.05
+
+
+def test_a_loop_edge_the_poses_already_satisfy_keeps_them_and_a_near_miss_is_solved():
+    truth = square_loop()
+    steps, poses = drifted(truth, yaw_bias=0.0)  # no drift: the chain is the truth
+    edges = [Edge(k, k + 1, s, 0.02, 0.02) for k, s in enumerate(steps)]
+    # The loop measured 1 cm off (half a standard deviation): the poses stand as they are.
+    slightly = Edge(0, len(truth) - 1, truth[-1].relative_to(truth[0]).compose(Pose2D(0.01, 0.0, 0.0)), 0.02, 0.02)
+    kept = close_loop(poses, edges, slightly)
+    assert kept is not None
+    assert kept.poses == poses
+    assert kept.worst_residual == pytest.approx(0.5)
+    # 5 cm off (2.5 standard deviations): solved, the gap spread over the loop.
+    off = Edge(0, len(truth) - 1, truth[-1].relative_to(truth[0]).compose(Pose2D(0.05, 0.0, 0.0)), 0.02, 0.02)
+    solved = close_loop(poses, edges, off)
+    assert solved is not None
+    assert solved.poses != poses
+    assert solved.worst_residual < 2.5
