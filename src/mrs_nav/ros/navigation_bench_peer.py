@@ -45,8 +45,9 @@ class _Robot:
         self.outcome: tuple[str, float, float] | None = None
         self.truth: tuple[float, float] | None = None
         self.contacts = 0
+        # the first map is all the peer needs: deserialising every later one would take CPU from the stack measured
+        self._map_sub = rospy.Subscriber(f"{prefix}/map", OccupancyGrid, self._on_map, queue_size=1)
         self.subs = [
-            rospy.Subscriber(f"{prefix}/map", OccupancyGrid, self._on_map, queue_size=1),
             rospy.Subscriber(f"{prefix}/rrt_navigation/status", String, self._on_status, queue_size=100),
             rospy.Subscriber(f"{prefix}/ground_truth/odom", Odometry, self._on_truth, queue_size=1),
             rospy.Subscriber(f"{prefix}/ground_truth/contacts", UInt32, self._on_contacts, queue_size=10),
@@ -55,6 +56,7 @@ class _Robot:
 
     def _on_map(self, _msg: OccupancyGrid) -> None:
         self.has_map = True
+        self._map_sub.unregister()
 
     def _on_status(self, msg: String) -> None:
         for word in ("reached", "failed"):

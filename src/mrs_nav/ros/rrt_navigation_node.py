@@ -43,6 +43,7 @@ from move_base_msgs.msg import MoveBaseAction, MoveBaseActionGoal, MoveBaseFeedb
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Path
 from nav_msgs.srv import GetPlan, GetPlanRequest, GetPlanResponse
+from rospy.numpy_msg import numpy_msg
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
@@ -218,7 +219,9 @@ class RrtNavigationNode:
         rospy.on_shutdown(self._stop)
         self._server.start()
         self._subs = [
-            rospy.Subscriber("map", OccupancyGridMsg, self._on_map, queue_size=1),
+            # numpy_msg: the cells arrive as one int8 array (plain genpy unpacks a tuple of ints, then numpy
+            # copies it: most of what a SLAM map update cost this node)
+            rospy.Subscriber("map", numpy_msg(OccupancyGridMsg), self._on_map, queue_size=1),
             rospy.Subscriber("scan", LaserScan, self._on_scan, queue_size=1),
             rospy.Subscriber("move_base_simple/goal", PoseStamped, self._on_simple_goal, queue_size=1),
         ]
