@@ -103,6 +103,7 @@ class RrtNavigationConfig:
 
     planner: str = "rrt_star"
     time_budget_s: float = 0.3
+    max_iterations: int | None = None  # None: the wall-clock budget alone ends a plan
     controller_frequency: float = 10.0
     pose_timeout_s: float = 1.0
     correction_timeout_s: float = 5.0
@@ -122,6 +123,8 @@ class RrtNavigationConfig:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise InvalidInputError(f"~{name}: must be a positive number, got {value}")
+        if self.max_iterations is not None and self.max_iterations < 1:
+            raise InvalidInputError(f"~max_iterations: must be >= 1 (0 = no cap), got {self.max_iterations}")
         for name in ("correction_freshness_s", "scan_timeout_s"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
@@ -165,9 +168,11 @@ class RrtNavigationConfig:
             approach=approach,
         )
         seed = private_param("seed", -1)
+        max_iterations = private_param("max_iterations", 0)
         return cls(
             planner=private_param("planner", "rrt_star"),
             time_budget_s=private_param("time_budget", 0.3),
+            max_iterations=None if max_iterations == 0 else max_iterations,
             controller_frequency=private_param("controller_frequency", 10.0),
             pose_timeout_s=private_param("pose_timeout", 1.0),
             correction_timeout_s=private_param("correction_timeout", 5.0),
@@ -187,7 +192,7 @@ class RrtNavigationNode:
 
     def __init__(self, config: RrtNavigationConfig) -> None:
         self.config = config
-        self._planner = rrt_planner(config.planner, config.time_budget_s)
+        self._planner = rrt_planner(config.planner, config.time_budget_s, config.max_iterations)
         self.navigator = Navigator(self._planner, config.navigator, seed=config.seed)
         self._query_rng = np.random.default_rng(None if config.seed is None else config.seed + 1)
         self._lock = threading.Lock()
