@@ -77,7 +77,7 @@ def test_scan_odom_tf_and_clock_arrive_at_their_rates_in_sim_time(simulation: An
         t0 = max(rec.stamps[0] for rec in recorders.values())  # every subscription is connected from here
         wait_for(lambda: rospy.get_time() > t0 + 6.0, 120.0, "6 s of sim time")
         t1 = t0 + 5.0
-        expected = {"/clock": 20.0, "/scan": 5.0, "/odom": 25.0, "/tf": 25.0}  # config/simulator.yaml
+        expected = {"/clock": 100.0, "/scan": 5.0, "/odom": 50.0, "/tf": 50.0}
         for topic, rate in expected.items():
             rec = recorders[topic]
             assert rec.period() == pytest.approx(1.0 / rate, rel=1e-6), topic

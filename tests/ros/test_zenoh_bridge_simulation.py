@@ -19,7 +19,7 @@ pytestmark = pytest.mark.ros
 def watched_simulation(
     ros_master: RosMaster, rospy_node: Any, tmp_path_factory: pytest.TempPathFactory
 ) -> Iterator[str]:
-    """The simulator in real time (its /odom at 25 Hz, /scan at 5 Hz) and a bridge; yields the endpoint."""
+    """The simulator in real time (its /odom at 50 Hz, /scan at 5 Hz) and a bridge; yields the endpoint."""
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     with (
         ros_master.launch("simulation.launch", "real_time_factor:=1", "x:=-1.5", "y:=-1.5", "yaw:=0") as sim,
@@ -49,6 +49,6 @@ def test_the_monitor_sees_the_simulated_robot_drive(watched_simulation: str, ros
     topics = summary["topics"]
     assert topics["/odom"]["type"] == "nav_msgs/Odometry"
     assert topics["/scan"]["rate_hz"] == pytest.approx(5.0, rel=0.2)
-    assert topics["/odom"]["rate_hz"] == pytest.approx(25.0, rel=0.2)  # config/simulator.yaml
+    assert topics["/odom"]["rate_hz"] == pytest.approx(50.0, rel=0.2)
     assert topics["/odom"]["latency_ms_p50"] < 20.0
     assert "/clock" not in topics  # denied by default

@@ -10,8 +10,8 @@ publishes the static base_footprint -> base_link -> base_scan from ``urdf/burger
 The node steps the simulator in its own loop at the fixed physics rate, paced against the wall clock by
 ``~real_time_factor`` (1 = real time, 2 = twice as fast, 0 = as fast as the machine allows). ``/clock`` goes
 out every ``physics_rate / clock_rate`` steps, so sim-time timers in other nodes keep their resolution at any
-speed; 20 Hz serves the 10 Hz controllers and SLAM's 20 Hz map->odom, and every tick wakes every sim-time timer
-of every node, which with several robots costs more than the physics. With ``~lockstep`` true the loop never runs
+speed; every tick wakes every sim-time timer of every node, which with several robots costs more than the physics
+(multi_robot.launch publishes 20 Hz, what the 10 Hz controllers need). With ``~lockstep`` true the loop never runs
 more than ``~lockstep_period`` of sim time past the last ``cmd_vel`` it received (and publishes the clock where it
 waits), so a controller ticking on sim time keeps up at any rate (see
 :mod:`mrs_nav.sim.lockstep`: free running before the first command and after ``~lockstep_timeout`` wall seconds
@@ -99,8 +99,8 @@ class SimulatorNodeConfig:
     start: Pose2D
     sim: SimulatorConfig = field(default_factory=SimulatorConfig)
     real_time_factor: float = 1.0
-    odom_rate: float = 25.0
-    clock_rate: float = 20.0
+    odom_rate: float = 50.0
+    clock_rate: float = 100.0
     joint_states_rate: float = 10.0
     odom_frame: str = "odom"
     base_frame: str = "base_footprint"
@@ -143,8 +143,8 @@ class SimulatorNodeConfig:
             start=Pose2D(private_param("x", 0.0), private_param("y", 0.0), private_param("yaw", 0.0)),
             sim=sim,
             real_time_factor=private_param("real_time_factor", 1.0),
-            odom_rate=private_param("odom_rate", 25.0),
-            clock_rate=private_param("clock_rate", 20.0),
+            odom_rate=private_param("odom_rate", 50.0),
+            clock_rate=private_param("clock_rate", 100.0),
             joint_states_rate=private_param("joint_states_rate", 10.0),
             odom_frame=private_param("odom_frame", "odom"),
             base_frame=private_param("base_frame", "base_footprint"),
