@@ -306,8 +306,8 @@ class SimulatorNode:
             states = [(r.robot.odometry(), r.robot.ground_truth(), r.robot.ground_truth_twist()) for r in self._robots]
         transforms = []
         for ports, (odom, truth, truth_twist) in zip(self._robots, states, strict=True):
-            # Odometry messages only for listeners: the navigation stack reads the pose from tf, and building
-            # messages nobody receives is most of what this costs with several robots.
+            # Odometry messages only for listeners: the navigation stack reads the pose from tf, and with several
+            # robots a message per robot and stream at odom_rate is built for nobody otherwise.
             if ports.odom_pub.get_num_connections() > 0:
                 ports.odom_pub.publish(
                     odometry_msg(
