@@ -92,8 +92,6 @@ STATUS_OF_EVENT = {
     EventKind.REACHED: "reached",
     EventKind.FAILED: "failed",
 }
-# s (sim) to wait for tf at a scan's stamp: the odometry of that instant is on its way with the scan
-_SCAN_TF_WAIT = 0.1
 COSTMAP_PERIOD_S = 1.0  # sim seconds between costmap messages at most (rviz redraws a big grid slowly)
 
 
@@ -109,6 +107,8 @@ class RrtNavigationConfig:
     correction_timeout_s: float = 5.0
     correction_freshness_s: float = 0.3
     scan_timeout_s: float = 0.4
+    # s (sim) to wait for tf at a scan's stamp: the odometry of that instant is on its way with the scan
+    transform_tolerance_s: float = 0.1
     map_frame: str = "map"
     odom_frame: str = "odom"
     base_frame: str = "base_footprint"
@@ -125,7 +125,7 @@ class RrtNavigationConfig:
                 raise InvalidInputError(f"~{name}: must be a positive number, got {value}")
         if self.max_iterations is not None and self.max_iterations < 1:
             raise InvalidInputError(f"~max_iterations: must be >= 1 (0 = no cap), got {self.max_iterations}")
-        for name in ("correction_freshness_s", "scan_timeout_s"):
+        for name in ("correction_freshness_s", "scan_timeout_s", "transform_tolerance_s"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise InvalidInputError(f"~{name}: must be a number >= 0 (0 = off), got {value}")
@@ -178,6 +178,7 @@ class RrtNavigationConfig:
             correction_timeout_s=private_param("correction_timeout", 5.0),
             correction_freshness_s=private_param("correction_freshness", 0.3),
             scan_timeout_s=private_param("scan_timeout", 0.4),
+            transform_tolerance_s=private_param("transform_tolerance", 0.1),
             map_frame=private_param("map_frame", "map"),
             odom_frame=private_param("odom_frame", "odom"),
             base_frame=private_param("base_frame", "base_footprint"),
@@ -255,7 +256,9 @@ class RrtNavigationNode:
 
     def _on_scan(self, msg: LaserScan) -> None:
         try:
-            origin, ends, hit = scan_in_frame(self._tf_buffer, msg, self.config.map_frame, _SCAN_TF_WAIT)
+            origin, ends, hit = scan_in_frame(
+                self._tf_buffer, msg, self.config.map_frame, self.config.transform_tolerance_s
+            )
         except MrsNavError as err:
             rospy.logwarn_throttle(5.0, f"rrt_navigation: dropping scan: {err}")
             return
