@@ -33,3 +33,21 @@ def test_numbers_come_as_the_defaults_type() -> None:
 def test_a_wrong_kind_names_the_parameter(value: object, default: object, match: str) -> None:
     with pytest.raises(InvalidInputError, match=match):
         _convert("p", value, default)  # type: ignore[type-var]
+
+
+def test_rrt_navigation_max_iterations_caps_a_plan_and_a_cap_below_one_is_refused() -> None:
+    import numpy as np
+
+    from mrs_nav.geometry import Pose2D
+    from mrs_nav.maps.occupancy_grid import OccupancyGrid
+    from mrs_nav.navigation.plan_worker import rrt_planner
+    from mrs_nav.ros.rrt_navigation_node import RrtNavigationConfig
+
+    config = RrtNavigationConfig(time_budget_s=5.0, max_iterations=40)
+    plan = rrt_planner(config.planner, config.time_budget_s, config.max_iterations)
+    grid = OccupancyGrid(np.zeros((60, 60), dtype=np.int8), 0.05, (0.0, 0.0, 0.0))
+    result = plan(grid, Pose2D(0.5, 0.5, 0.0), (2.5, 2.5), np.random.default_rng(0))
+    assert result.success
+    assert result.iterations == 40  # the cap, long before the 5 s budget
+    with pytest.raises(InvalidInputError, match=r"~max_iterations: must be >= 1 \(0 = no cap\), got -3"):
+        RrtNavigationConfig(max_iterations=-3)

@@ -5,7 +5,8 @@ Run as ``python -m mrs_nav.ros.navigation_bench_peer --goal X Y --out FILE`` aga
 ``rrt_navigation.launch`` runs. It waits for the first map and the navigation node, lets 3 s of sim time pass
 (so the node has the map too), sends the goal on ``/move_base_simple/goal`` and waits for ``reached`` or
 ``failed`` on ``/rrt_navigation/status``. Writes JSON: ``reached``, ``sim_s`` and ``wall_s`` from the goal to
-the outcome, ``final_error_m`` (true pose from ``/ground_truth/odom`` to the goal) and ``contacts``.
+the outcome, ``wall_start`` (``time.monotonic()``, system-wide, when the goal went out), ``final_error_m`` (true
+pose from ``/ground_truth/odom`` to the goal) and ``contacts``.
 
 With ``--robot NS X Y`` (repeated, instead of ``--goal``; ``multi_robot.launch``) the same for every robot at
 once under its namespace (``/NS/map``, ``/NS/move_base_simple/goal``, ...): all goals go out together and the
@@ -45,8 +46,9 @@ class _Robot:
         self.outcome: tuple[str, float, float] | None = None
         self.truth: tuple[float, float] | None = None
         self.contacts = 0
+        # the first map is all the peer needs: deserialising every later one would take CPU from the stack measured
+        self._map_sub = rospy.Subscriber(f"{prefix}/map", OccupancyGrid, self._on_map, queue_size=1)
         self.subs = [
-            rospy.Subscriber(f"{prefix}/map", OccupancyGrid, self._on_map, queue_size=1),
             rospy.Subscriber(f"{prefix}/rrt_navigation/status", String, self._on_status, queue_size=100),
             rospy.Subscriber(f"{prefix}/ground_truth/odom", Odometry, self._on_truth, queue_size=1),
             rospy.Subscriber(f"{prefix}/ground_truth/contacts", UInt32, self._on_contacts, queue_size=10),
@@ -55,6 +57,7 @@ class _Robot:
 
     def _on_map(self, _msg: OccupancyGrid) -> None:
         self.has_map = True
+        self._map_sub.unregister()
 
     def _on_status(self, msg: String) -> None:
         for word in ("reached", "failed"):
@@ -126,6 +129,7 @@ def main() -> None:
             "sim_s": max(r["sim_s"] for r in results.values()),
             "wall_s": max(r["wall_s"] for r in results.values()),
         }
+    summary["wall_start"] = wall0  # time.monotonic() (system-wide) when the goals went out
     with open(args.out, "w", encoding="utf-8") as out:
         json.dump(summary, out)
     for robot in robots.values():

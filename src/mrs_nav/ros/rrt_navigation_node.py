@@ -43,6 +43,7 @@ from move_base_msgs.msg import MoveBaseAction, MoveBaseActionGoal, MoveBaseFeedb
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Path
 from nav_msgs.srv import GetPlan, GetPlanRequest, GetPlanResponse
+from rospy.numpy_msg import numpy_msg
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
@@ -91,8 +92,6 @@ STATUS_OF_EVENT = {
     EventKind.REACHED: "reached",
     EventKind.FAILED: "failed",
 }
-# s (sim) to wait for tf at a scan's stamp: the odometry of that instant is on its way with the scan
-_SCAN_TF_WAIT = 0.1
 COSTMAP_PERIOD_S = 1.0  # sim seconds between costmap messages at most (rviz redraws a big grid slowly)
 
 
@@ -102,11 +101,14 @@ class RrtNavigationConfig:
 
     planner: str = "rrt_star"
     time_budget_s: float = 0.3
+    max_iterations: int | None = None  # None: the wall-clock budget alone ends a plan
     controller_frequency: float = 10.0
     pose_timeout_s: float = 1.0
     correction_timeout_s: float = 5.0
     correction_freshness_s: float = 0.3
     scan_timeout_s: float = 0.4
+    # s (sim) to wait for tf at a scan's stamp: the odometry of that instant is on its way with the scan
+    transform_tolerance_s: float = 0.1
     map_frame: str = "map"
     odom_frame: str = "odom"
     base_frame: str = "base_footprint"
@@ -121,7 +123,9 @@ class RrtNavigationConfig:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise InvalidInputError(f"~{name}: must be a positive number, got {value}")
-        for name in ("correction_freshness_s", "scan_timeout_s"):
+        if self.max_iterations is not None and self.max_iterations < 1:
+            raise InvalidInputError(f"~max_iterations: must be >= 1 (0 = no cap), got {self.max_iterations}")
+        for name in ("correction_freshness_s", "scan_timeout_s", "transform_tolerance_s"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise InvalidInputError(f"~{name}: must be a number >= 0 (0 = off), got {value}")
@@ -164,14 +168,17 @@ class RrtNavigationConfig:
             approach=approach,
         )
         seed = private_param("seed", -1)
+        max_iterations = private_param("max_iterations", 0)
         return cls(
             planner=private_param("planner", "rrt_star"),
             time_budget_s=private_param("time_budget", 0.3),
+            max_iterations=None if max_iterations == 0 else max_iterations,
             controller_frequency=private_param("controller_frequency", 10.0),
             pose_timeout_s=private_param("pose_timeout", 1.0),
             correction_timeout_s=private_param("correction_timeout", 5.0),
             correction_freshness_s=private_param("correction_freshness", 0.3),
             scan_timeout_s=private_param("scan_timeout", 0.4),
+            transform_tolerance_s=private_param("transform_tolerance", 0.1),
             map_frame=private_param("map_frame", "map"),
             odom_frame=private_param("odom_frame", "odom"),
             base_frame=private_param("base_frame", "base_footprint"),
@@ -186,7 +193,7 @@ class RrtNavigationNode:
 
     def __init__(self, config: RrtNavigationConfig) -> None:
         self.config = config
-        self._planner = rrt_planner(config.planner, config.time_budget_s)
+        self._planner = rrt_planner(config.planner, config.time_budget_s, config.max_iterations)
         self.navigator = Navigator(self._planner, config.navigator, seed=config.seed)
         self._query_rng = np.random.default_rng(None if config.seed is None else config.seed + 1)
         self._lock = threading.Lock()
@@ -218,7 +225,9 @@ class RrtNavigationNode:
         rospy.on_shutdown(self._stop)
         self._server.start()
         self._subs = [
-            rospy.Subscriber("map", OccupancyGridMsg, self._on_map, queue_size=1),
+            # numpy_msg: the cells arrive as one int8 array (plain genpy unpacks a tuple of ints, then numpy
+            # copies it: most of what a SLAM map update cost this node)
+            rospy.Subscriber("map", numpy_msg(OccupancyGridMsg), self._on_map, queue_size=1),
             rospy.Subscriber("scan", LaserScan, self._on_scan, queue_size=1),
             rospy.Subscriber("move_base_simple/goal", PoseStamped, self._on_simple_goal, queue_size=1),
         ]
@@ -247,7 +256,9 @@ class RrtNavigationNode:
 
     def _on_scan(self, msg: LaserScan) -> None:
         try:
-            origin, ends, hit = scan_in_frame(self._tf_buffer, msg, self.config.map_frame, _SCAN_TF_WAIT)
+            origin, ends, hit = scan_in_frame(
+                self._tf_buffer, msg, self.config.map_frame, self.config.transform_tolerance_s
+            )
         except MrsNavError as err:
             rospy.logwarn_throttle(5.0, f"rrt_navigation: dropping scan: {err}")
             return

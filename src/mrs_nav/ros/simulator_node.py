@@ -10,8 +10,10 @@ publishes the static base_footprint -> base_link -> base_scan from ``urdf/burger
 The node steps the simulator in its own loop at the fixed physics rate, paced against the wall clock by
 ``~real_time_factor`` (1 = real time, 2 = twice as fast, 0 = as fast as the machine allows). ``/clock`` goes
 out every ``physics_rate / clock_rate`` steps, so sim-time timers in other nodes keep their resolution at any
-speed. With ``~lockstep`` true the loop never runs more than ``~lockstep_period`` of sim time past the last
-``cmd_vel`` it received, so a controller ticking on sim time keeps up at any rate (see
+speed; every tick wakes every sim-time timer of every node, which with several robots costs more than the physics
+(multi_robot.launch publishes 20 Hz, what the 10 Hz controllers need). With ``~lockstep`` true the loop never runs
+more than ``~lockstep_period`` of sim time past the last ``cmd_vel`` it received (and publishes the clock where it
+waits), so a controller ticking on sim time keeps up at any rate (see
 :mod:`mrs_nav.sim.lockstep`: free running before the first command and after ``~lockstep_timeout`` wall seconds
 of silence). A bad ``cmd_vel`` (non-finite numbers) is logged and ignored; the watchdog then stops the robot.
 ``~add_box`` (visualization_msgs/Marker of type CUBE: pose in the world frame, scale = full sizes in m, ``ns``
@@ -271,6 +273,7 @@ class SimulatorNode:
         ]
         self._box_sub = rospy.Subscriber("~add_box", Marker, self._on_add_box, queue_size=10)
         self._set_own_time = _own_the_clock()
+        self._clock_sent = -math.inf  # sim time of the last /clock published
 
     def _on_add_box(self, msg: Marker) -> None:
         """Add a box obstacle at run time: a CUBE marker's pose (world frame) and scale (full sizes, m)."""
@@ -303,19 +306,25 @@ class SimulatorNode:
             states = [(r.robot.odometry(), r.robot.ground_truth(), r.robot.ground_truth_twist()) for r in self._robots]
         transforms = []
         for ports, (odom, truth, truth_twist) in zip(self._robots, states, strict=True):
-            ports.odom_pub.publish(
-                odometry_msg(
-                    odom.pose,
-                    Twist2D(odom.v, odom.omega),
-                    now,
-                    frame_id=ports.odom_frame,
-                    child_frame_id=ports.base_frame,
+            # Odometry messages only for listeners: the navigation stack reads the pose from tf, and with several
+            # robots a message per robot and stream at odom_rate is built for nobody otherwise.
+            if ports.odom_pub.get_num_connections() > 0:
+                ports.odom_pub.publish(
+                    odometry_msg(
+                        odom.pose,
+                        Twist2D(odom.v, odom.omega),
+                        now,
+                        frame_id=ports.odom_frame,
+                        child_frame_id=ports.base_frame,
+                    )
                 )
-            )
             transforms.append(transform_stamped(odom.pose, now, ports.odom_frame, ports.base_frame))
-            ports.truth_pub.publish(
-                odometry_msg(truth, truth_twist, now, frame_id=cfg.ground_truth_frame, child_frame_id=ports.base_frame)
-            )
+            if ports.truth_pub.get_num_connections() > 0:
+                ports.truth_pub.publish(
+                    odometry_msg(
+                        truth, truth_twist, now, frame_id=cfg.ground_truth_frame, child_frame_id=ports.base_frame
+                    )
+                )
         if self._tf is not None:
             # one /tf message for every robot: each message costs every tf listener a deserialisation
             self._tf.sendTransform(transforms)
@@ -340,8 +349,7 @@ class SimulatorNode:
                 ports.contact_events = events
                 ports.contacts_pub.publish(UInt32(data=events))
         if steps % self._clock_every == 0:
-            self._clock_pub.publish(clock_msg(now))
-            self._set_own_time(to_ros_time(now))
+            self._publish_clock(now)
         if steps % self._odom_every == 0:
             self._publish_state()
         if steps % self._joints_every == 0:
@@ -349,6 +357,11 @@ class SimulatorNode:
         for ports, scan in zip(self._robots, scans, strict=True):
             if scan is not None:
                 ports.scan_pub.publish(laser_scan_msg(scan, ports.scan_frame))
+
+    def _publish_clock(self, now: float) -> None:
+        self._clock_pub.publish(clock_msg(now))
+        self._set_own_time(to_ros_time(now))
+        self._clock_sent = now
 
     def _blocking_gate(self) -> LockstepGate | None:
         """In lockstep, the gate of a robot whose controller the simulation must wait for (None: step on)."""
@@ -359,11 +372,15 @@ class SimulatorNode:
         """Step until shutdown, paced by ``real_time_factor`` against the wall clock and, in lockstep, held
         within one control period of every robot's last command."""
         rtf = self.config.real_time_factor
-        self._clock_pub.publish(clock_msg(self.fleet.time))
+        self._publish_clock(self.fleet.time)
         wall_start, sim_start = time.monotonic(), self.fleet.time
         while not rospy.is_shutdown():
             gate = self._blocking_gate()
             if gate is not None:
+                if self._clock_sent != self.fleet.time:
+                    # The controllers tick on sim time: the instant the simulation waits at must reach them even
+                    # when it falls between two /clock ticks (clock_rate below physics_rate), or no command comes.
+                    self._publish_clock(self.fleet.time)
                 # bounded wait so shutdown is noticed; the wall clock stands still for pacing meanwhile
                 waited_from = time.monotonic()
                 gate.wait_for_command(self.fleet.time, 0.1)
