@@ -162,17 +162,21 @@ def _measure(tmp: Path, duration: float) -> str:
                 time.sleep(1.0)
             cpu = (cpu_seconds(bridge.pid) - cpu0) / (time.monotonic() - wall0) * 100
         if peer.returncode != 0 or not out.exists():
-            log = (tmp / "peer.log").read_text(errors="replace")[-2000:]
-            raise RosProcessError(f"bench bridge: the ROS peer failed ({peer.returncode}):\n{log}")
+            raise RosProcessError(f"bench bridge: the ROS peer failed ({peer.returncode}):\n{_tail(tmp / 'peer.log')}")
         received = []
         for i, subscriber in enumerate(subscribers):
             stop(subscriber)  # SIGINT: it writes what it received
             path = tmp / f"sub{i}.json"
             if not path.exists():
-                log = (tmp / f"sub{i}.log").read_text(errors="replace")[-2000:]
+                log = _tail(tmp / f"sub{i}.log")
                 raise RosProcessError(f"bench bridge: remote subscriber {i} wrote nothing:\n{log}")
             received.append(Received.from_json(path.read_text(encoding="utf-8")))
     return _report(json.loads(out.read_text()), received, cpu, rss, duration)
+
+
+def _tail(log: Path) -> str:
+    """The end of a process's log, for an error message."""
+    return log.read_text(errors="replace")[-2000:]
 
 
 def _subscriber_command(endpoint: str, client_tls: Path, tmp: Path, i: int) -> list[str]:
@@ -188,7 +192,7 @@ def _wait_ready(tmp: Path, subscribers: list[subprocess.Popen[bytes]]) -> None:
     for i, subscriber in enumerate(subscribers):
         while not (tmp / f"sub{i}.ready").exists():
             if subscriber.poll() is not None or time.monotonic() > deadline:
-                log = (tmp / f"sub{i}.log").read_text(errors="replace")[-2000:]
+                log = _tail(tmp / f"sub{i}.log")
                 raise RosProcessError(f"bench bridge: remote subscriber {i} did not subscribe:\n{log}")
             time.sleep(0.1)
 
