@@ -3,8 +3,9 @@
 
 Starts its own roscore and a zenoh_bridge as the robot's Zenoh router on a free loopback TLS port (mutual TLS
 with certificates made by openssl for the run, the bridge's access control on, multicast scouting off), a ROS
-peer (:mod:`mrs_nav.ros.bridge_bench_peer`) that publishes the load and subscribes to it directly, and 5 Zenoh
-client sessions here, each with its own subscriber. For every message (matched by ``header.seq``, the first 4
+peer (:mod:`mrs_nav.ros.bridge_bench_peer`) that publishes the load and subscribes to it directly, and 5 remote
+subscribers (:mod:`mrs_nav.bench.bridge_subscriber`), each a process with its own TLS client session, as remote
+users' would be. For every message (matched by ``header.seq``, the first 4
 bytes of the payload) and subscriber the added latency is the Zenoh receive time minus the direct ROS
 subscriber's receive time, both wall clock on this machine; a message is lost if any subscriber misses it. The
 bridge's CPU use is its process's user + system time over the run, in % of one core; its RSS is sampled every
@@ -14,6 +15,7 @@ second, and its drift is the slope of a least-squares line through the samples.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
@@ -23,6 +25,7 @@ import tempfile
 import threading
 import time
 from collections.abc import Iterable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -34,7 +37,7 @@ from mrs_nav.bridge.wire import decode_attachment
 from mrs_nav.errors import MrsNavError
 from mrs_nav.options import duration_option
 from mrs_nav.resources import CHECKOUT
-from mrs_nav.ros_processes import RosProcessError, free_port, process, roscore
+from mrs_nav.ros_processes import RosProcessError, free_port, process, roscore, stop
 from mrs_nav.tables import markdown_table
 
 TOPICS = {"/odom": 100.0, "/scan": 5.0, "/map": 1.0}
@@ -74,6 +77,26 @@ def cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
+@dataclass(frozen=True)
+class Received:
+    """What one remote subscriber got: per topic, header.seq -> its receive time and -> the time the bridge's
+    rospy callback got the message (both wall clock, s)."""
+
+    times: dict[str, dict[int, float]]
+    bridge: dict[str, dict[int, float]]
+
+    def to_json(self) -> str:
+        return json.dumps({"times": self.times, "bridge": self.bridge})
+
+    @classmethod
+    def from_json(cls, text: str) -> Received:
+        data = json.loads(text)  # JSON keys are text: header.seq back to int
+        times, bridge = (
+            {t: {int(s): v for s, v in seqs.items()} for t, seqs in data[k].items()} for k in ("times", "bridge")
+        )
+        return cls(times, bridge)
+
+
 class Receiver:
     """Zenoh receive times (wall clock, s) per ROS topic (the key without its first chunk) and header.seq, and
     the attachments, which carry the time the bridge's rospy callback got the message."""
@@ -95,9 +118,16 @@ class Receiver:
                 if attachment is not None:
                     self.attachments[topic][seq] = attachment.to_bytes()
 
-    def bridge_times(self, topic: str) -> dict[int, float]:
-        """header.seq -> wall-clock time (s) at which the bridge's ROS callback got the message."""
-        return {seq: decode_attachment(a).receive_time_ns * 1e-9 for seq, a in self.attachments[topic].items()}
+    def received(self) -> Received:
+        """Everything received so far, the attachments decoded (after the run: the callback only stores)."""
+        with self.lock:
+            times = {topic: dict(by_seq) for topic, by_seq in self.times.items()}
+            attachments = {topic: dict(by_seq) for topic, by_seq in self.attachments.items()}
+        bridge = {
+            topic: {seq: decode_attachment(a).receive_time_ns * 1e-9 for seq, a in by_seq.items()}
+            for topic, by_seq in attachments.items()
+        }
+        return Received(times, bridge)
 
 
 def run(args: argparse.Namespace) -> str:
@@ -109,35 +139,62 @@ def _measure(tmp: Path, duration: float) -> str:
     endpoint = f"tls/127.0.0.1:{free_port()}"
     bridge_tls, client_tls = _tls_files(tmp)
     config = tmp / "bridge.yaml"
-    config.write_text(
-        json.dumps({"mode": "router", "listen": [endpoint], "zenoh_config": str(bridge_tls), "discovery_period": 0.2})
-    )
-    receivers = [Receiver() for _ in range(SUBSCRIBERS)]
+    config.write_text(json.dumps({"mode": "router", "listen": [endpoint], "zenoh_config": str(bridge_tls)}))
     rss: list[tuple[float, float]] = []
-    with roscore(tmp) as env:
+    with contextlib.ExitStack() as stack:
+        env = stack.enter_context(roscore(tmp))
         bridge_cmd = [sys.executable, str(CHECKOUT / "scripts" / "zenoh_bridge"), f"_config_file:={config}"]
-        with process(bridge_cmd, env, tmp / "zenoh_bridge.log") as bridge:
-            sessions = [connect_when_up(endpoint, str(client_tls), bridge) for _ in receivers]
-            try:
-                for session, receiver in zip(sessions, receivers, strict=True):
-                    session.declare_subscriber("mrs_nav/**", receiver)
-                out = tmp / "peer.json"
-                peer_cmd = [sys.executable, "-m", "mrs_nav.ros.bridge_bench_peer", "--out", str(out)]
-                with process([*peer_cmd, "--duration", str(duration)], env, tmp / "peer.log") as peer:
-                    cpu0, wall0 = cpu_seconds(bridge.pid), time.monotonic()
-                    while peer.poll() is None:
-                        if time.monotonic() - wall0 > duration + 120:
-                            raise RosProcessError("bench bridge: the ROS peer did not finish in time")
-                        rss.append((time.monotonic() - wall0, rss_mb(bridge.pid)))
-                        time.sleep(1.0)
-                    cpu = (cpu_seconds(bridge.pid) - cpu0) / (time.monotonic() - wall0) * 100
-            finally:
-                for session in sessions:
-                    session.close()  # type: ignore[no-untyped-call]
-            if peer.returncode != 0 or not out.exists():
-                log = (tmp / "peer.log").read_text(errors="replace")[-2000:]
-                raise RosProcessError(f"bench bridge: the ROS peer failed ({peer.returncode}):\n{log}")
-    return _report(json.loads(out.read_text()), receivers, cpu, rss, duration)
+        bridge = stack.enter_context(process(bridge_cmd, env, tmp / "zenoh_bridge.log"))
+        connect_when_up(endpoint, str(client_tls), bridge).close()
+        subscribers = [
+            stack.enter_context(process(_subscriber_command(endpoint, client_tls, tmp, i), env, tmp / f"sub{i}.log"))
+            for i in range(SUBSCRIBERS)
+        ]
+        _wait_ready(tmp, subscribers)
+        out = tmp / "peer.json"
+        peer_cmd = [sys.executable, "-m", "mrs_nav.ros.bridge_bench_peer", "--out", str(out)]
+        with process([*peer_cmd, "--duration", str(duration)], env, tmp / "peer.log") as peer:
+            cpu0, wall0 = cpu_seconds(bridge.pid), time.monotonic()
+            while peer.poll() is None:
+                if time.monotonic() - wall0 > duration + 120:
+                    raise RosProcessError("bench bridge: the ROS peer did not finish in time")
+                rss.append((time.monotonic() - wall0, rss_mb(bridge.pid)))
+                time.sleep(1.0)
+            cpu = (cpu_seconds(bridge.pid) - cpu0) / (time.monotonic() - wall0) * 100
+        if peer.returncode != 0 or not out.exists():
+            raise RosProcessError(f"bench bridge: the ROS peer failed ({peer.returncode}):\n{_tail(tmp / 'peer.log')}")
+        received = []
+        for i, subscriber in enumerate(subscribers):
+            stop(subscriber)  # SIGINT: it writes what it received
+            path = tmp / f"sub{i}.json"
+            if not path.exists():
+                log = _tail(tmp / f"sub{i}.log")
+                raise RosProcessError(f"bench bridge: remote subscriber {i} wrote nothing:\n{log}")
+            received.append(Received.from_json(path.read_text(encoding="utf-8")))
+    return _report(json.loads(out.read_text()), received, cpu, rss, duration)
+
+
+def _tail(log: Path) -> str:
+    """The end of a process's log, for an error message."""
+    return log.read_text(errors="replace")[-2000:]
+
+
+def _subscriber_command(endpoint: str, client_tls: Path, tmp: Path, i: int) -> list[str]:
+    return [
+        sys.executable, "-m", "mrs_nav.bench.bridge_subscriber", "--connect", endpoint,
+        "--zenoh-config", str(client_tls), "--ready", str(tmp / f"sub{i}.ready"), "--out", str(tmp / f"sub{i}.json"),
+    ]  # fmt: skip
+
+
+def _wait_ready(tmp: Path, subscribers: list[subprocess.Popen[bytes]]) -> None:
+    """Until every remote subscriber has subscribed (its ready file), at most 60 s."""
+    deadline = time.monotonic() + 60.0
+    for i, subscriber in enumerate(subscribers):
+        while not (tmp / f"sub{i}.ready").exists():
+            if subscriber.poll() is not None or time.monotonic() > deadline:
+                log = _tail(tmp / f"sub{i}.log")
+                raise RosProcessError(f"bench bridge: remote subscriber {i} did not subscribe:\n{log}")
+            time.sleep(0.1)
 
 
 def connect_when_up(endpoint: str, config_file: str, bridge: subprocess.Popen[bytes]) -> Any:
@@ -156,7 +213,7 @@ def connect_when_up(endpoint: str, config_file: str, bridge: subprocess.Popen[by
 
 def _report(
     report: dict[str, Any],
-    receivers: list[Receiver],
+    receivers: list[Received],
     cpu: float,
     rss: list[tuple[float, float]],
     duration: float,
@@ -167,14 +224,17 @@ def _report(
     ros_hop: list[float] = []  # the bridge's rospy callback minus the direct subscriber's
     zenoh_hop: list[float] = []  # a Zenoh subscriber's callback minus the bridge's rospy callback
     lost_total = 0
+    missed = [0] * len(receivers)  # per subscriber process, all topics
     for topic, rate in TOPICS.items():
         sent = report[topic]["sent"]
         direct = {int(k): v for k, v in report[topic]["direct"].items()}
         lost = sum(any(seq not in r.times[topic] for r in receivers) for seq in sent)
         lost_total += lost
+        for i, receiver in enumerate(receivers):
+            missed[i] += sum(seq not in receiver.times[topic] for seq in sent)
         added: list[float] = []
         for receiver, mine in zip(receivers, per_subscriber, strict=True):
-            got, at_bridge = receiver.times[topic], receiver.bridge_times(topic)
+            got, at_bridge = receiver.times[topic], receiver.bridge[topic]
             both = [s for s in sent if s in got and s in direct]
             values = [(got[s] - direct[s]) * 1e3 for s in both]
             mine.extend(values)
@@ -205,12 +265,13 @@ def _report(
     verdict = "meets" if p50 <= TARGET_P50_MS and p99 <= TARGET_P99_MS and lost_total == 0 else "MISSES"
     return (
         f"{duration:g} s measured after a 1 s warm-up; added latency = Zenoh receive time minus a direct rospy "
-        f"subscriber's receive time for the same message, over {SUBSCRIBERS} remote subscribers (client sessions "
-        "of this process) of the bridge running as the robot's Zenoh router with mutual TLS and its access "
-        f"control on (loopback, one machine).\n\n{table}\n\n"
+        f"subscriber's receive time for the same message, over {SUBSCRIBERS} remote subscribers (each a process "
+        "with its own client session, its callback run on the Zenoh thread that read the sample) of the bridge "
+        "running as the robot's Zenoh router with mutual TLS, its access control on and its default settings "
+        f"(loopback, one machine).\n\n{table}\n\n"
         f"All topics: added latency p50 {p50:.3f} ms, p99 {p99:.3f} ms; {lost_total} lost. Split at the bridge's "
-        f"receive time (its attachment, same clock): {hops}. Added p50 per subscriber, in the order their "
-        f"sessions were opened: {subscribers} ms.\n"
+        f"receive time (its attachment, same clock): {hops}. Added p50 per subscriber process: {subscribers} ms; "
+        f"messages each missed: {', '.join(map(str, missed))}.\n"
         f"Bridge CPU "
         f"{cpu:.1f} % of one core (load average {load:.1f} on {cores} cores); bridge RSS "
         f"{mb[0]:.1f} MB at the start, {mb[settled][0]:.1f} MB at {SETTLE:.0%} of the run, {mb[-1]:.1f} MB at the end, "

@@ -228,7 +228,10 @@ def zenoh_settings(
     back off from 100 ms to ``retry_period`` so a restarted peer or router is found again quickly. A sample
     waits up to 50 ms (Zenoh's default: 1 ms) for room in a congested transmit queue before it is dropped:
     on a busy 2-core machine 1 ms lost odometry messages, and 50 ms is still far below what would back up
-    the bridge's ROS subscriber queues.
+    the bridge's ROS subscriber queues. Express publishers send every sample in a batch of its own, so the data
+    queue (Zenoh's default: 2 batches per link) holds 2 samples: 16 (Zenoh's maximum) lets a link whose transmit
+    thread is held off the CPU fall 16 samples behind (160 ms of odometry) before puts wait at all; batches are
+    allocated lazily, so an idle link costs nothing.
     """
     retry_ms = max(100, round(retry_period * 1000))
     return {
@@ -240,6 +243,7 @@ def zenoh_settings(
         "timestamping/enabled": True,
         "transport/link/tx/queue/congestion_control/drop/wait_before_drop": 50_000,  # µs
         "transport/link/tx/queue/congestion_control/drop/max_wait_before_drop_fragments": 250_000,  # µs
+        "transport/link/tx/queue/size/data": 16,  # batches
     }
 
 
