@@ -95,10 +95,9 @@ def test_cancel_stops_the_robot_within_half_a_second(arena: dict[str, Any]) -> N
     _, x0, y0 = truth.last()
     client.send_goal(target(rospy, -x0, -y0 + 0.1, 0.0))
     wait_for(lambda: client.get_state() == GoalStatus.ACTIVE, 20.0, "the goal to be active")
-    t0 = rospy.get_time()
-    wait_for(lambda: rospy.get_time() > t0 + 4.0, 30.0, "the robot to be on its way")
-    now = rospy.get_time()
-    assert truth.moved(now - 0.5, now) > 0.03  # it was moving
+    # Moving, not merely 4 s of sim time after the goal: the plan's budget is wall-clock time, so on a loaded
+    # machine at max rate the robot may still be planning or turning on the spot then (a CI run saw 9 mm).
+    wait_for(lambda: truth.moved(rospy.get_time() - 0.5, rospy.get_time()) > 0.03, 60.0, "the robot to be on its way")
     client.cancel_goal()
     cancelled_at = rospy.get_time()
     assert wait_result(arena) == GoalStatus.PREEMPTED
