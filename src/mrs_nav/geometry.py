@@ -58,6 +58,12 @@ class Pose2D:
             wrap_angle(self.yaw + other.yaw),
         )
 
+    def apply(self, points: FloatArray) -> FloatArray:
+        """``points`` (N x 2) given in the frame of this pose, returned in the parent frame (N x 2)."""
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        x, y = points[:, 0], points[:, 1]
+        return np.stack([self.x + c * x - s * y, self.y + s * x + c * y], axis=1)
+
     def inverse(self) -> Pose2D:
         c, s = math.cos(self.yaw), math.sin(self.yaw)
         return Pose2D(-c * self.x - s * self.y, s * self.x - c * self.y, wrap_angle(-self.yaw))

@@ -37,6 +37,7 @@ from mrs_nav.slam.config import SlamConfig
 from mrs_nav.slam.consistency import BROKEN_FRACTION, REVISIT_GAP, revisit_spread
 from mrs_nav.slam.metrics import affine_fit, windowed_ate
 from mrs_nav.slam.relations import load_relations
+from mrs_nav.slam.scan import LaserScanData, split_beams
 from mrs_nav.slam.sim_drive import OFFICE_LOOP_WAYPOINTS, OFFICE_START, drive_with_slam
 from mrs_nav.tables import markdown_table
 
@@ -74,16 +75,14 @@ def run(args: argparse.Namespace) -> str:
 
 
 def _end_points(log: Path) -> list[FloatArray]:
-    """Each FLASER scan's end points in the laser frame (readings below the log's largest, which is the SICK's
-    "no return"), in log order, as the conversion reads them."""
+    """Each FLASER scan's hit end points in the laser frame, in log order, as the conversion and the SLAM see
+    them: readings at the log's largest (the SICK's "no return") are not hits."""
     scans = list(read_flaser(log))
     limit = max(float(np.max(s.ranges)) for s in scans)
-    out = []
-    for scan in scans:
-        angles = scan.angle_min + scan.angle_increment * np.arange(scan.ranges.size)
-        hit = (scan.ranges > 0.0) & (scan.ranges < limit)
-        out.append(np.stack([scan.ranges[hit] * np.cos(angles[hit]), scan.ranges[hit] * np.sin(angles[hit])], axis=1))
-    return out
+    return [
+        split_beams(LaserScanData(s.angle_min, s.angle_increment, 0.0, limit, s.ranges), math.inf).hit_points
+        for s in scans
+    ]
 
 
 def _office() -> str:

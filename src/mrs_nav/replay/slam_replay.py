@@ -259,28 +259,14 @@ def _plot(result: SlamReplay, estimate: list[Pose2D], png: Path) -> None:
     if est.size:
         ax.plot(est[:, 0], est[:, 1], "b-", lw=1.0, label="SLAM")
         odo = np.array([[p.x, p.y] for p in result.odometry])
-        first = estimate[0].compose(result.odometry[0].inverse())
-        c, s = math.cos(first.yaw), math.sin(first.yaw)
-        ax.plot(
-            first.x + c * odo[:, 0] - s * odo[:, 1],
-            first.y + s * odo[:, 0] + c * odo[:, 1],
-            "r:",
-            lw=0.8,
-            label="odometry",
-        )
+        odo_in_map = estimate[0].compose(result.odometry[0].inverse()).apply(odo)
+        ax.plot(odo_in_map[:, 0], odo_in_map[:, 1], "r:", lw=0.8, label="odometry")
         if result.has_truth:
             # Ground truth is drawn in the map frame: the rigid fit of truth onto the estimate.
             paired_estimate, paired_truth = result.truth_pairs()
             gt = np.array([[p.x, p.y] for p in paired_truth])
-            angle, shift = align_se2(gt, np.array([[p.x, p.y] for p in paired_estimate]))
-            c, s = math.cos(angle), math.sin(angle)
-            ax.plot(
-                c * gt[:, 0] - s * gt[:, 1] + shift[0],
-                s * gt[:, 0] + c * gt[:, 1] + shift[1],
-                "g--",
-                lw=0.8,
-                label="ground truth",
-            )
+            gt_in_map = align_se2(gt, np.array([[p.x, p.y] for p in paired_estimate])).apply(gt)
+            ax.plot(gt_in_map[:, 0], gt_in_map[:, 1], "g--", lw=0.8, label="ground truth")
         xs = np.concatenate([est[:, 0]])
         ys = np.concatenate([est[:, 1]])
         known = np.nonzero(occ >= 0)

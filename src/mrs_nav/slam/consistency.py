@@ -72,12 +72,7 @@ def revisit_spread(sensor_poses: Sequence[Pose2D], points: Sequence[FloatArray],
     world, owner = [], []
     for k, (pose, local) in enumerate(zip(sensor_poses, points, strict=True)):
         thinned = thin_points(np.asarray(local, dtype=np.float64).reshape(-1, 2), REVISIT_CELL_M)
-        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
-        world.append(
-            np.stack(
-                [pose.x + c * thinned[:, 0] - s * thinned[:, 1], pose.y + s * thinned[:, 0] + c * thinned[:, 1]], axis=1
-            )
-        )
+        world.append(pose.apply(thinned))
         owner.append(np.full(thinned.shape[0], k))
     xy, scan = np.concatenate(world), np.concatenate(owner)
     if xy.shape[0] == 0:

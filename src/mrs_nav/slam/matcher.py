@@ -248,9 +248,7 @@ class ScanMatcher:
         return Pose2D(x, y, wrap_angle(yaw))
 
     def _evaluate(self, field: DistanceField, likelihood: FloatArray, points: FloatArray, pose: Pose2D) -> MatchResult:
-        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
-        wx = pose.x + c * points[:, 0] - s * points[:, 1]
-        wy = pose.y + s * points[:, 0] + c * points[:, 1]
+        wx, wy = pose.apply(points).T
         d, _, _ = field.interpolate(wx, wy)
         score = float(np.mean(np.exp(-(d**2) / (2.0 * self.sigma**2))))
         return MatchResult(pose, score, float(np.mean(d < 1.5 * field.resolution)))

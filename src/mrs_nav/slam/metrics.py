@@ -33,13 +33,15 @@ class TrajectoryErrors:
     rpe_rot_mean_deg: float
 
 
-def align_se2(estimate: FloatArray, truth: FloatArray) -> tuple[float, FloatArray]:
-    """Rotation angle (rad) and translation (2,) that best map ``estimate`` positions onto ``truth`` (N x 2)."""
+def align_se2(estimate: FloatArray, truth: FloatArray) -> Pose2D:
+    """The rigid motion (rotation and translation) that best maps ``estimate`` positions onto ``truth`` (N x 2),
+    in the least-squares sense: ``align_se2(e, t).apply(e)`` is the aligned estimate."""
     mu_e, mu_t = estimate.mean(axis=0), truth.mean(axis=0)
     e, t = estimate - mu_e, truth - mu_t
     angle = math.atan2(float(np.sum(e[:, 0] * t[:, 1] - e[:, 1] * t[:, 0])), float(np.sum(e * t)))
     rot = np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
-    return angle, np.asarray(mu_t - rot @ mu_e, dtype=np.float64)
+    shift = mu_t - rot @ mu_e
+    return Pose2D(float(shift[0]), float(shift[1]), angle)
 
 
 def trajectory_errors(estimate: Sequence[Pose2D], truth: Sequence[Pose2D]) -> TrajectoryErrors:
@@ -48,11 +50,9 @@ def trajectory_errors(estimate: Sequence[Pose2D], truth: Sequence[Pose2D]) -> Tr
         raise InvalidInputError(f"trajectory errors need >= 2 matched poses, got {len(estimate)} and {len(truth)}")
     est = np.array([[p.x, p.y, p.yaw] for p in estimate])
     gt = np.array([[p.x, p.y, p.yaw] for p in truth])
-    angle, shift = align_se2(est[:, :2], gt[:, :2])
-    c, s = math.cos(angle), math.sin(angle)
-    aligned = np.stack([c * est[:, 0] - s * est[:, 1] + shift[0], s * est[:, 0] + c * est[:, 1] + shift[1]], axis=1)
-    pos_err = np.linalg.norm(aligned - gt[:, :2], axis=1)
-    yaw_err = wrap_angles(est[:, 2] + angle - gt[:, 2])
+    alignment = align_se2(est[:, :2], gt[:, :2])
+    pos_err = np.linalg.norm(alignment.apply(est[:, :2]) - gt[:, :2], axis=1)
+    yaw_err = wrap_angles(est[:, 2] + alignment.yaw - gt[:, 2])
     trans, rot = [], []
     for i in range(1, len(estimate)):
         d_est = estimate[i].relative_to(estimate[i - 1])
@@ -80,9 +80,7 @@ def windowed_ate(estimate: Sequence[Pose2D], truth: Sequence[Pose2D], window: in
     errors = []
     for start in range(0, len(est) - window + 1, max(1, window // 2)):
         e, t = est[start : start + window], gt[start : start + window]
-        angle, shift = align_se2(e, t)
-        c, s = math.cos(angle), math.sin(angle)
-        aligned = np.stack([c * e[:, 0] - s * e[:, 1] + shift[0], s * e[:, 0] + c * e[:, 1] + shift[1]], axis=1)
+        aligned = align_se2(e, t).apply(e)
         errors.append(math.sqrt(float(np.mean(np.sum((aligned - t) ** 2, axis=1)))))
     return float(np.median(errors))
 

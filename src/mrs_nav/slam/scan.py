@@ -88,6 +88,11 @@ class BeamSplit:
     free_angles: FloatArray
     free_ranges: FloatArray
 
+    @property
+    def hit_points(self) -> FloatArray:
+        """The hit beams' end points in the laser frame (N x 2, m)."""
+        return np.stack([self.hit_ranges * np.cos(self.hit_angles), self.hit_ranges * np.sin(self.hit_angles)], axis=1)
+
 
 @dataclass(frozen=True)
 class StoredBeams:

@@ -108,8 +108,8 @@ def drive_with_slam(
     errors = trajectory_errors(estimate, truth)
     # SLAM fixes its map frame only up to a rigid motion (its first headings come from odometry): the map is
     # compared with the world after the same SE(2) alignment as the ATE, estimate onto ground truth.
-    angle, shift = align_se2(np.array([[p.x, p.y] for p in estimate]), np.array([[p.x, p.y] for p in truth]))
-    map_in_world = (float(shift[0]), float(shift[1]), angle)
+    alignment = align_se2(np.array([[p.x, p.y] for p in estimate]), np.array([[p.x, p.y] for p in truth]))
+    map_in_world = (alignment.x, alignment.y, alignment.yaw)
     iou = map_iou(slam.grid, world, map_in_world)
     iou_one_cell = map_iou(slam.grid, world, map_in_world, tolerance=1)
     return DriveResult(errors, iou, iou_one_cell, len(estimate), tuple(slam_ms), sim.time, slam)

@@ -40,7 +40,7 @@ from mrs_nav.slam.config import MAX_COORDINATE_M, MAX_MAP_CELLS, SlamConfig
 from mrs_nav.slam.grid import LogOddsGrid
 from mrs_nav.slam.matcher import DistanceField, MatchResult, ScanMatcher, thin_points
 from mrs_nav.slam.posegraph import Edge, close_loop
-from mrs_nav.slam.scan import BeamSplit, LaserScanData, StoredBeams, split_beams
+from mrs_nav.slam.scan import LaserScanData, StoredBeams, split_beams
 
 MIN_POINTS = 10  # fewer end points than this: trust odometry, the match would be noise
 FIELD_MAX_DISTANCE = 0.5  # m, truncation of the distance field
@@ -181,7 +181,7 @@ class Slam:
                 f"odometry pose ({odom.x:.6g}, {odom.y:.6g}) puts the robot beyond {MAX_COORDINATE_M:g} m in the map"
             )
         match = None
-        points = _points(beams)
+        points = beams.hit_points
         if self.last is not None and points.shape[0] >= MIN_POINTS:
             sensor_prior = predicted.compose(mount)
             match = self._match(points, sensor_prior, self._spread(odom, self.last))
@@ -347,9 +347,7 @@ class Slam:
 def _weakest_constraint(field: DistanceField, points: FloatArray, pose: Pose2D) -> float:
     """How well the surfaces under the matched ``points`` pin the pose in its weakest direction: the smallest
     eigenvalue of the mean outer product of their normals (0 in a straight corridor, 0.5 in a corner)."""
-    c, s = math.cos(pose.yaw), math.sin(pose.yaw)
-    wx = pose.x + c * points[:, 0] - s * points[:, 1]
-    wy = pose.y + s * points[:, 0] + c * points[:, 1]
+    wx, wy = pose.apply(points).T
     _, _, normal = field.nearest_surface(wx, wy)
     normal = normal[np.isfinite(normal)]
     if normal.size < 3:
@@ -360,16 +358,10 @@ def _weakest_constraint(field: DistanceField, points: FloatArray, pose: Pose2D) 
 
 def _field(grid: LogOddsGrid, points: FloatArray, sensor_prior: Pose2D, search_linear: float) -> DistanceField:
     """The distance field of ``grid`` over the window the scan ``points`` can reach from ``sensor_prior``."""
-    c, s = math.cos(sensor_prior.yaw), math.sin(sensor_prior.yaw)
-    wx = sensor_prior.x + c * points[:, 0] - s * points[:, 1]
-    wy = sensor_prior.y + s * points[:, 0] + c * points[:, 1]
+    wx, wy = sensor_prior.apply(points).T
     # The window covers the predicted scan plus the linear search; points that the angular search swings
     # farther out fall in the padding, where they score nothing, which is what a wrong heading deserves.
     reach = search_linear + FIELD_MAX_DISTANCE
     bounds = (float(wx.min()) - reach, float(wy.min()) - reach, float(wx.max()) + reach, float(wy.max()) + reach)
     pad = math.ceil(reach / grid.resolution) + 2
     return DistanceField(grid, bounds, FIELD_MAX_DISTANCE, pad)
-
-
-def _points(beams: BeamSplit) -> FloatArray:
-    return np.stack([beams.hit_ranges * np.cos(beams.hit_angles), beams.hit_ranges * np.sin(beams.hit_angles)], axis=1)
