@@ -151,6 +151,9 @@ def _run_batch(args: argparse.Namespace) -> int:
         out = args.out / bag.name.removesuffix(".active").removesuffix(".bag")
         golden = golden_beside(bag)
         jobs.append(golden_job(bag, out, golden) if golden else job_from_args(args, bag, out, None))
+    # No monitor thread: the local workers are forked after the bar exists, and only a single-threaded parent
+    # forks them (others start them through a fork server, which costs each its imports).
+    tqdm.monitor_interval = 0
     bar: Any = tqdm(total=len(jobs), desc="replay", unit="bag") if sys.stderr.isatty() else None
     try:
         outcomes = run_jobs(jobs, args.workers, args.cluster, (lambda _: bar.update()) if bar else None)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import shutil
+import threading
 from pathlib import Path
 
 import pytest
@@ -58,9 +59,22 @@ def test_report_holds_each_bag_to_its_golden(serial: tuple[int, Path]) -> None:
     assert not (out / "strict" / "plans.json").exists()
 
 
-def test_local_workers_give_byte_identical_outputs(folder: Path, serial: tuple[int, Path], tmp_path: Path) -> None:
+@pytest.mark.parametrize("other_thread", [False, True], ids=["forked", "fork server"])
+def test_local_workers_give_byte_identical_outputs(
+    folder: Path, serial: tuple[int, Path], tmp_path: Path, other_thread: bool
+) -> None:
+    """Forked from a single-threaded parent, or through a fork server when the parent holds another thread."""
     code, out = serial
-    assert _batch(folder, tmp_path / "pool", "--workers", "2") == code
+    stop = threading.Event()
+    waiter = threading.Thread(target=stop.wait)
+    if other_thread:
+        waiter.start()
+    try:
+        assert _batch(folder, tmp_path / "pool", "--workers", "2") == code
+    finally:
+        stop.set()
+        if other_thread:
+            waiter.join()
     assert _files(tmp_path / "pool") == _files(out)
 
 
@@ -69,7 +83,12 @@ def test_a_two_worker_dask_cluster_gives_the_serial_result(
 ) -> None:
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None
+        n_workers=2,
+        threads_per_worker=1,
+        processes=True,
+        host="127.0.0.1",
+        dashboard_address=None,
+        preload=["mrs_nav.replay.batch"],  # as the README tells users to start workers (its dask_setup runs)
     ) as cluster:
         code = _batch(folder, tmp_path / "dask", "--cluster", cluster.scheduler_address)
     assert code == serial[0]
