@@ -15,14 +15,15 @@ from typing import Any
 from mrs_nav.cli import tree_planners
 from mrs_nav.cli.common import fail, print_json
 from mrs_nav.errors import InvalidInputError
-from mrs_nav.fields.potential_field import Bounds, PotentialField, workspace_bounds
+from mrs_nav.fields.potential_field import DEFAULT_GOAL_FADE, Bounds, PotentialField, workspace_bounds
 from mrs_nav.fields.randomized_potential_field import EscapeSettings, plan_potential_field
 from mrs_nav.geometry import Pose2D
-from mrs_nav.limits import MAX_ITERATIONS, MAX_SEED
+from mrs_nav.limits import MAX_ITERATIONS, MAX_ROBOT_RADIUS_M, MAX_SEED, MAX_SIZE_M
 from mrs_nav.maps.obstacles import Obstacles
 from mrs_nav.maps.world import load_world
-from mrs_nav.options import count_option, parse_floats, seed_option
+from mrs_nav.options import count_option, number_option, parse_floats, radius_option, seed_option
 from mrs_nav.planning import PlanResult
+from mrs_nav.robot import BURGER_RADIUS
 
 Planner = Callable[[argparse.Namespace, Pose2D, tuple[float, float]], PlanResult]
 
@@ -48,21 +49,32 @@ def _is_file(text: str) -> bool:
         return False
 
 
-def check_free(obstacles: Obstacles, bounds: Bounds | None, what: str, x: float, y: float) -> None:
-    """Raise :class:`InvalidInputError` when ``(x, y)`` is outside ``bounds`` or inside an obstacle."""
+def check_free(
+    obstacles: Obstacles, bounds: Bounds | None, what: str, x: float, y: float, *, robot_radius: float = 0.0
+) -> None:
+    """Raise :class:`InvalidInputError` when ``(x, y)`` is outside ``bounds``, inside an obstacle or, for a
+    robot of ``robot_radius`` (m), close enough to one that the robot would overlap it."""
     if bounds is not None and not (bounds[0] <= x <= bounds[2] and bounds[1] <= y <= bounds[3]):
         raise InvalidInputError(
             f"{what} ({x}, {y}) is outside the world [{bounds[0]:g}, {bounds[2]:g}] x [{bounds[1]:g}, {bounds[3]:g}]"
         )
     if obstacles.contains((x, y))[0]:
         raise InvalidInputError(f"{what} ({x}, {y}) is inside an obstacle")
+    if robot_radius > 0.0 and obstacles.inflated(robot_radius).contains((x, y))[0]:
+        raise InvalidInputError(
+            f"{what} ({x}, {y}) is within --robot-radius {robot_radius:g} m of an obstacle: the robot would overlap it"
+        )
 
 
 def plan_with_potential_field(args: argparse.Namespace, start: Pose2D, goal: tuple[float, float]) -> PlanResult:
     obstacles, bounds = load_obstacles(args)
-    check_free(obstacles, bounds, "start", start.x, start.y)
-    check_free(obstacles, bounds, "goal", *goal)
-    field = PotentialField.build(goal, obstacles, bounds or workspace_bounds(obstacles, (start.x, start.y), goal))
+    check_free(obstacles, bounds, "start", start.x, start.y, robot_radius=args.robot_radius)
+    check_free(obstacles, bounds, "goal", *goal, robot_radius=args.robot_radius)
+    # The field is built around the obstacles grown by the robot's radius, so the planned point stands for the
+    # whole robot (the configuration space of a disc).
+    grown = obstacles.inflated(args.robot_radius)
+    bounds = bounds or workspace_bounds(grown, (start.x, start.y), goal)
+    field = PotentialField.build(goal, grown, bounds, goal_fade=args.goal_fade)
     settings = EscapeSettings(max_steps=args.max_steps)
     return plan_potential_field(field, (start.x, start.y, start.yaw), args.seed, settings)
 
@@ -88,6 +100,22 @@ def register(subparsers: Any) -> None:
     parser.add_argument("--planner", choices=sorted(PLANNERS), default="potential_field")
     parser.add_argument("--start", required=True, metavar="X,Y[,YAW]", help="start pose (m, m, rad)")
     parser.add_argument("--goal", required=True, metavar="X,Y", help="goal position (m)")
+    parser.add_argument(
+        "--robot-radius",
+        type=radius_option,
+        default=BURGER_RADIUS,
+        metavar="R",
+        help=f"obstacles are grown by this radius, so the path is one the robot fits along; at most "
+        f"{MAX_ROBOT_RADIUS_M:g} m (default {BURGER_RADIUS}, the Burger's; 0 plans for a point)",
+    )
+    parser.add_argument(
+        "--goal-fade",
+        type=number_option(0.0, MAX_SIZE_M),
+        default=DEFAULT_GOAL_FADE,
+        metavar="M",
+        help=f"potential field: the obstacles' push fades within about this distance of the goal, so a goal beside "
+        f"a wall is reached (Ge and Cui 2000); 0 is the course's field (default {DEFAULT_GOAL_FADE} m)",
+    )
     parser.add_argument("--seed", type=seed_option, default=0, help=f"random seed, 0..{MAX_SEED} (default 0)")
     parser.add_argument(
         "--max-steps",

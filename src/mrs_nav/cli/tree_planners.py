@@ -15,14 +15,13 @@ import numpy as np
 from mrs_nav.cli.common import check_writable
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
-from mrs_nav.limits import MAX_BUDGET_S, MAX_ITERATIONS, MAX_ROBOT_RADIUS_M, MAX_SIZE_M
+from mrs_nav.limits import MAX_BUDGET_S, MAX_ITERATIONS, MAX_SIZE_M
 from mrs_nav.maps.map_io import load_map
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.maps.rasterize import DEFAULT_RESOLUTION, rasterize_world
 from mrs_nav.maps.world import load_world
-from mrs_nav.options import budget_option, count_option, number_option, radius_option
+from mrs_nav.options import budget_option, count_option, number_option
 from mrs_nav.planning import PlanResult
-from mrs_nav.robot import BURGER_RADIUS
 from mrs_nav.trees.rrt import RRTConfig, grow_rrt
 from mrs_nav.trees.rrt_star import RRTStarConfig, grow_rrt_star
 from mrs_nav.trees.tree import Search
@@ -49,13 +48,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="N",
         help=f"samples to draw, at most {MAX_ITERATIONS} (rrt default 2000; rrt_star: none)",
-    )
-    group.add_argument(
-        "--robot-radius",
-        type=radius_option,
-        default=BURGER_RADIUS,
-        metavar="R",
-        help=f"obstacles are inflated by this radius, at most {MAX_ROBOT_RADIUS_M:g} m (default {BURGER_RADIUS})",
     )
     group.add_argument(
         "--resolution",

@@ -17,6 +17,18 @@ takes ``V_max = factor * max_x |x_g - x|`` with ``factor = 2`` as the assignment
 
 The combined field ``V = V_a + V_r`` (``V_r = sum_i V_i``) is capped at ``max_speed``:
 ``cap(v) = v * min(1, max_speed / |v|)``.
+
+Goal beside an obstacle (``goal_fade`` ``kappa`` > 0; 0, the default, is the course's field above). Near a wall
+the push ``V_r`` does not vanish at the goal, so the field's equilibrium sits off the goal, farther the closer
+the wall (Ge and Cui, "New potential functions for mobile robot path planning", IEEE T-RA 16(5), 2000: "goals
+nonreachable with obstacles nearby"). As they do, the repulsive potential is multiplied by a factor that is 0 at
+the goal, here ``g = 1 - exp(-rho^2 / kappa^2)`` with ``rho = |x - x_g|``, so ``U = U_a + g U_r`` is 0 at the
+goal and positive elsewhere: the goal is the global minimum. Its velocity field, exactly ``-grad U``::
+
+    V_r' = g V_r + (2 / kappa^2) exp(-rho^2 / kappa^2) U_r (x_g - x),     U_r = sum_i lambda V_max exp(-d_i / lambda)
+
+Within about ``kappa`` of the goal the obstacles' push fades and an extra pull towards the goal appears; a few
+``kappa`` away the field is the course's (``exp(-9)`` of the fade left at ``3 kappa``).
 """
 
 from __future__ import annotations
@@ -37,6 +49,9 @@ from mrs_nav.maps.obstacles import Obstacles
 DEFAULT_MAX_SPEED = 0.5
 DEFAULT_DECAY = 0.08
 DEFAULT_VMAX_FACTOR = 2.0
+# For a robot planning beside walls (mrs-nav plan): the fade reaches about 2.5 lambda, so a wall within 3.5
+# lambda of the goal (its push there above 3 % of V_max) no longer holds the robot off it.
+DEFAULT_GOAL_FADE = 0.2
 
 
 class FieldMode(Enum):
@@ -75,8 +90,8 @@ def workspace_bounds(obstacles: Obstacles, *points: npt.ArrayLike, margin: float
 class PotentialField:
     """The attractive + repulsive velocity field towards ``goal`` around ``obstacles``.
 
-    ``v_max`` (m/s) is the repulsive speed at an obstacle's surface, ``decay`` (m) is ``lambda``, and
-    ``max_speed`` (m/s) caps the combined field.
+    ``v_max`` (m/s) is the repulsive speed at an obstacle's surface, ``decay`` (m) is ``lambda``,
+    ``max_speed`` (m/s) caps the combined field and ``goal_fade`` (m) is ``kappa`` (0: no fade).
     """
 
     goal: tuple[float, float]
@@ -84,14 +99,16 @@ class PotentialField:
     v_max: float
     decay: float = DEFAULT_DECAY
     max_speed: float = DEFAULT_MAX_SPEED
+    goal_fade: float = 0.0
 
     def __post_init__(self) -> None:
-        values = (*self.goal, self.v_max, self.decay, self.max_speed)
+        values = (*self.goal, self.v_max, self.decay, self.max_speed, self.goal_fade)
         if not all(math.isfinite(v) for v in values):
             raise InvalidInputError(f"potential field parameters must be finite, got {values}")
-        if self.v_max <= 0.0 or self.decay <= 0.0 or self.max_speed <= 0.0:
+        if self.v_max <= 0.0 or self.decay <= 0.0 or self.max_speed <= 0.0 or self.goal_fade < 0.0:
             raise InvalidInputError(
-                f"v_max, decay and max_speed must be positive, got {self.v_max}, {self.decay}, {self.max_speed}"
+                f"v_max, decay and max_speed must be positive and goal_fade >= 0, got {self.v_max}, {self.decay}, "
+                f"{self.max_speed}, {self.goal_fade}"
             )
 
     @classmethod
@@ -104,6 +121,7 @@ class PotentialField:
         decay: float = DEFAULT_DECAY,
         vmax_factor: float = DEFAULT_VMAX_FACTOR,
         max_speed: float = DEFAULT_MAX_SPEED,
+        goal_fade: float = 0.0,
     ) -> PotentialField:
         """The field with ``V_max = vmax_factor * max |x_g - x|`` over the workspace ``bounds``.
 
@@ -114,7 +132,7 @@ class PotentialField:
         xmin, ymin, xmax, ymax = bounds
         corners = np.array([[xmin, ymin], [xmin, ymax], [xmax, ymin], [xmax, ymax]])
         farthest = float(np.max(np.hypot(*(corners - np.asarray(goal, dtype=np.float64)).T)))
-        return cls(goal, obstacles, vmax_factor * farthest, decay, max_speed)
+        return cls(goal, obstacles, vmax_factor * farthest, decay, max_speed, goal_fade)
 
     def attractive(self, points: npt.ArrayLike) -> FloatArray:
         """``V_a = x_g - x`` at each point ``(P, 2)``."""
@@ -122,10 +140,19 @@ class PotentialField:
         return np.asarray(np.asarray(self.goal, dtype=np.float64) - p, dtype=np.float64)
 
     def repulsive(self, points: npt.ArrayLike) -> FloatArray:
-        """``V_r = sum_i V_max n_i exp(-d_i / lambda)`` over obstacles with the point outside, ``(P, 2)``."""
-        dist, normal = self.obstacles.surface(points)
-        weight = np.where(dist > 0.0, self.v_max * np.exp(-np.maximum(dist, 0.0) / self.decay), 0.0)
-        return np.asarray(np.einsum("pk,pkj->pj", weight, normal), dtype=np.float64)
+        """``V_r = sum_i V_max n_i exp(-d_i / lambda)`` over obstacles with the point outside, ``(P, 2)``; with a
+        goal fade, ``V_r'`` (module doc)."""
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        dist, normal = self.obstacles.surface(p)
+        push = np.exp(-np.maximum(dist, 0.0) / self.decay)
+        weight = np.where(dist > 0.0, self.v_max * push, 0.0)
+        v = np.einsum("pk,pkj->pj", weight, normal)
+        if self.goal_fade > 0.0:
+            to_goal = np.asarray(self.goal, dtype=np.float64) - p
+            near = np.exp(-np.sum(to_goal**2, axis=1) / self.goal_fade**2)
+            u_r = self.decay * self.v_max * push.sum(axis=1)
+            v = (1.0 - near)[:, None] * v + (2.0 / self.goal_fade**2 * near * u_r)[:, None] * to_goal
+        return np.asarray(v, dtype=np.float64)
 
     def velocity(
         self,
@@ -149,7 +176,8 @@ class PotentialField:
         return cap(v, self.max_speed)
 
     def potential(self, points: npt.ArrayLike) -> FloatArray:
-        """``U = |x - x_g|^2 / 2 + sum_i U_max exp(-d_i / lambda)`` at each point, ``(P,)``.
+        """``U = |x - x_g|^2 / 2 + g sum_i U_max exp(-d_i / lambda)`` at each point, ``(P,)`` (``g = 1`` without
+        a goal fade).
 
         The exact derivative of ``U_max exp(-d / lambda)`` has magnitude ``U_max / lambda`` at the surface; the
         assignment's ``V_max = U_max / (2 lambda)`` carries an extra factor 1/2. Here ``U_max = lambda V_max``
@@ -160,6 +188,8 @@ class PotentialField:
         u_max = self.decay * self.v_max
         repulsive = (u_max * np.exp(-np.maximum(dist, 0.0) / self.decay)).sum(axis=1)
         attractive = 0.5 * np.sum((p - np.asarray(self.goal)) ** 2, axis=1)
+        if self.goal_fade > 0.0:
+            repulsive *= 1.0 - np.exp(-2.0 * attractive / self.goal_fade**2)
         return np.asarray(attractive + repulsive, dtype=np.float64)
 
 

@@ -10,9 +10,12 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from mrs_nav.cli.main import main
+from mrs_nav.maps.obstacles import Obstacles
+from mrs_nav.maps.world import load_world
 from tests.rosharness import REPO
 
 TRAP = "[[0, 0.25, 0.3], [0, -0.25, 0.3]]"
@@ -29,6 +32,20 @@ def test_plan_in_the_course_world_prints_the_path_as_json(
     assert out["path"][-1][:2] == [1.5, 1.5]
     assert out["length_m"] == pytest.approx(sum(math.dist(a[:2], b[:2]) for a, b in itertools.pairwise(out["path"])))
     assert {"time_s", "first_solution_s", "iterations", "nodes", "reason"} <= out.keys()
+
+
+@pytest.mark.parametrize("radius", [0.105, 0.2])
+def test_potential_field_path_keeps_the_robot_radius_from_every_obstacle(
+    radius: float, simple_world: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The field is planned around the obstacles grown by --robot-radius, and the goal in the arena's corner is
+    still reached (the goal fade)."""
+    argv = ["plan", "--world", str(simple_world), "--start", "-1.5,-1.5", "--goal", "1.5,1.5", "--json"]
+    assert main([*argv, "--robot-radius", str(radius)]) == 0
+    path = np.array(json.loads(capsys.readouterr().out)["path"])[:, :2]
+    dense = np.concatenate([np.linspace(a, b, 200) for a, b in itertools.pairwise(path)])
+    assert Obstacles.from_world(load_world(simple_world)).signed_distance(dense).min() >= radius - 1e-9
+    assert math.dist(path[-1], (1.5, 1.5)) < 0.05
 
 
 def test_plan_around_circles_from_a_file_is_seeded(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -63,6 +80,11 @@ def test_goal_not_reached_exits_2_with_the_reason(capsys: pytest.CaptureFixture[
         (["--circles", TRAP, "--start", "-1.5,0", "--goal", "1.5"], "--goal: expected 2 numbers"),
         (["--world", "WORLD", "--start", "3,0", "--goal", "1.5,1.5"], "start (3.0, 0.0) is outside the world"),
         (["--world", "WORLD", "--start", "2.05,0", "--goal", "1.5,1.5"], "inside an obstacle"),
+        (
+            ["--circles", TRAP, "--start", "-0.35,0.25", "--goal", "1.5,0"],
+            "start (-0.35, 0.25) is within --robot-radius 0.105 m of an obstacle",
+        ),
+        (["--circles", TRAP, "--start", "-1.5,0", "--goal", "1.5,0", "--goal-fade", "-1"], "--goal-fade"),
     ],
 )
 def test_bad_input_prints_one_line_and_exits_1(
