@@ -425,7 +425,6 @@ def extend_star(
     new = size
     position[new, 0], position[new, 1] = xn, yn
     yaw[new], cost[new] = new_yaw, new_cost
-    first_child[new] = -1
     link(tree, new, parent)
     others = near[near != parent]
     if others.size == 0:
