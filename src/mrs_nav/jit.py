@@ -11,7 +11,12 @@ from __future__ import annotations
 import importlib
 
 # Modules holding numba kernels, by name: importing them compiles (or loads) their kernels.
-KERNEL_MODULES: tuple[str, ...] = ("mrs_nav.slam.grid", "mrs_nav.slam.matcher", "mrs_nav.trees.kernels")
+KERNEL_MODULES: tuple[str, ...] = (
+    "mrs_nav.sim.laser",
+    "mrs_nav.slam.grid",
+    "mrs_nav.slam.matcher",
+    "mrs_nav.trees.kernels",
+)
 
 
 def warm() -> None:

@@ -1,6 +1,6 @@
 """Safe use of ``python3-pyode`` (bindings 1.2.0.dev15) over libode 0.16: corrected constants, loud callbacks.
 
-Three traps of these bindings (see PLATFORM.md), handled here once for the physics and the laser:
+Three traps of these bindings (see PLATFORM.md), handled here once for the physics:
 
 * the joint-parameter constants predate ODE 0.16, which inserted LoVel/HiVel after Vel, so ``ode.ParamFMax``
   sets the wrong parameter and a motor silently never moves: the library's values are defined below;

@@ -6,8 +6,8 @@ velocity motors with a torque limit. The world's boxes and cylinders become stat
 ground. Contacts use ODE's friction pyramid scaled by the normal force (``Approx1``), so a wheel slips when the
 motor asks for more traction than friction gives, and the odometry (read from the hinges) shows it. Every
 robot's geoms sit in a space of their own, so robots collide with each other like with a wall (each is told
-the other's name) and a robot's laser can be cast against the other robots' spaces and never against its own
-chassis.
+the other's name). A robot's laser is cast against the cross-sections at its height of the static geoms and
+the other robots' geoms (:meth:`Physics.laser_sections`), never against its own chassis.
 
 The python3-pyode traps (wrong joint and contact constants, swallowed callback errors, geoms destroyed with
 their Python object) are handled by :mod:`mrs_nav.sim.ode_bindings` and by keeping every geom referenced here.
@@ -20,15 +20,17 @@ generator), so two simulations built alike step identically.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
 import ode
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.maps.world import Box, World
+from mrs_nav.sim.laser import Sections
 from mrs_nav.sim.ode_bindings import (
     CONTACT_APPROX1,
     CONTACT_SOFT_CFM,
@@ -48,6 +50,34 @@ def _rotation_z(yaw: float) -> tuple[float, ...]:
     """Row-major 3x3 rotation by ``yaw`` about z, as ODE takes it."""
     c, s = math.cos(yaw), math.sin(yaw)
     return (c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
+
+
+def _cross_sections(geoms: Iterable[Any], height: float) -> Sections:
+    """The cross-sections at ``height`` (m) of upright ODE boxes, cylinders (axis along z) and spheres.
+
+    Robots tilt by at most a few hundredths of a radian on their wheels and caster, so their chassis cylinder
+    is taken as upright too (its section's error is below a tenth of a millimetre).
+    """
+    circles: list[tuple[float, float, float]] = []
+    rects: list[tuple[float, float, float, float, float]] = []
+    for geom in geoms:
+        x, y, z = geom.getPosition()
+        if isinstance(geom, ode.GeomBox):
+            size_x, size_y, size_z = geom.getLengths()
+            if abs(height - z) <= size_z / 2.0:
+                r = geom.getRotation()
+                rects.append((x, y, math.atan2(r[3], r[0]), size_x / 2.0, size_y / 2.0))
+        elif isinstance(geom, ode.GeomCylinder):
+            radius, length = geom.getParams()
+            if abs(height - z) <= length / 2.0:
+                circles.append((x, y, radius))
+        elif isinstance(geom, ode.GeomSphere):
+            radius = geom.getRadius()
+            if abs(height - z) < radius:
+                circles.append((x, y, math.sqrt(radius**2 - (height - z) ** 2)))
+    return Sections(
+        np.array(circles, dtype=np.float64).reshape(-1, 3), np.array(rects, dtype=np.float64).reshape(-1, 5)
+    )
 
 
 @dataclass(frozen=True)
@@ -184,6 +214,8 @@ class Physics:
         self.obstacle_space = ode.HashSpace()
         self._ground = ode.GeomPlane(self._ground_space, (0.0, 0.0, 1.0), 0.0)
         self._obstacles: dict[Any, str] = {}
+        # The static geoms' cross-sections per laser height (m): the obstacles change only in add_box.
+        self._static_sections: dict[float, Sections] = {}
         self._add_obstacles(world)
         self.robots = [RobotBody(self._world, params, start, name) for start, name in zip(starts, names, strict=True)]
         self._owner = {geom: i for i, robot in enumerate(self.robots) for geom in robot.surface}
@@ -213,6 +245,7 @@ class Physics:
         geom.setPosition((box.x, box.y, box.z))
         geom.setRotation(_rotation_z(box.yaw))
         self._obstacles[geom] = box.name
+        self._static_sections.clear()
 
     # -- stepping -----------------------------------------------------------------------------------------------
 
@@ -286,9 +319,14 @@ class Physics:
 
     # -- state --------------------------------------------------------------------------------------------------
 
-    def laser_targets(self, index: int) -> list[Any]:
-        """The ODE spaces robot ``index``'s laser casts against: the obstacles and every other robot."""
-        return [self.obstacle_space, *(r.space for i, r in enumerate(self.robots) if i != index)]
+    def laser_sections(self, index: int, height: float) -> Sections:
+        """What robot ``index``'s laser at ``height`` (m) can hit: the cross-sections there of the obstacles and
+        of every other robot at its current pose."""
+        static = self._static_sections.get(height)
+        if static is None:
+            static = self._static_sections[height] = _cross_sections(self._obstacles, height)
+        others = _cross_sections((g for i, r in enumerate(self.robots) if i != index for g in r.surface), height)
+        return Sections.join([static, others])
 
     def move_robot(self, index: int, pose: Pose2D) -> None:
         """Teleport robot ``index``, at rest, so that its ``base_footprint`` is at ``pose`` (the kidnapped-robot

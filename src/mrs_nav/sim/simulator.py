@@ -103,7 +103,7 @@ class SimulatedRobot:
         self._config = config
         self._clock = clock
         laser_seed, odom_seed = seeds
-        self._laser = Laser(physics.laser_targets(index), config.laser, np.random.default_rng(laser_seed))
+        self._laser = Laser(config.laser, np.random.default_rng(laser_seed))
         self._odometry = WheelOdometry(config.robot, config.odom_noise, np.random.default_rng(odom_seed), self.start)
         self._limiter = CommandLimiter(config.robot)
         self._wheels = self._body.wheels()
@@ -201,7 +201,8 @@ class SimulatedRobot:
 
     def scan_now(self) -> Scan:
         """A scan from the current pose, outside the laser's schedule (draws from the laser's noise stream)."""
-        return self._laser.scan(self._body.pose(), self._clock())
+        sections = self._physics.laser_sections(self._index, self._config.laser.mount_z)
+        return self._laser.scan(self._body.pose(), self._clock(), sections)
 
     @property
     def contacts(self) -> ContactStats:

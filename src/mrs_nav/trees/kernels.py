@@ -1,10 +1,13 @@
 """Compiled kernels of the tree planners: the arc algebra of :mod:`mrs_nav.trees.arcs` and its collision check,
-one arc at a time, so that an RRT* iteration is a few compiled calls instead of ~300 numpy calls on a handful of
-elements (the profile of issue 18: 1,270 iterations/s against OMPL's 13,900).
+one arc at a time, and RRT*'s extend step (steer, choose parent, add, rewire) as one call, so that an RRT*
+iteration is one compiled call instead of ~300 numpy calls on a handful of elements (the profile of issue 18:
+1,270 iterations/s against OMPL's 13,900) or a dozen compiled calls glued by Python (issue 17: that glue and the
+calls' dispatch were ~40 % of a plan).
 
 The formulas and the collision check are those of :mod:`mrs_nav.trees.arcs` (read its docstring); the numpy
 versions there stay for batches (drawing, path sampling) and as the reference the tests compare these with.
-A grid enters as one tuple (:func:`grid_args`): ``cons`` (conservative free mask), ``free`` (free mask),
+A tree enters as one tuple of its arrays (:attr:`mrs_nav.trees.tree.ArcTree.arrays`), and a grid as one tuple
+(:func:`grid_args`): ``cons`` (conservative free mask), ``free`` (free mask),
 ``x0, y0`` (origin), ``c, s`` (cos and sin of the origin's yaw) and ``res`` (metres per cell). Kernels take
 positional arguments only (explicit signatures), hence the file-wide exemption from ruff's PLR0917.
 """
@@ -43,8 +46,14 @@ _ARC = nt.UniTuple(_F, 4)  # type: ignore[no-untyped-call]
 _XY = nt.UniTuple(_F, 2)  # type: ignore[no-untyped-call]
 _LEN_YAW = _XY
 _CELL = nt.UniTuple(_I, 2)  # type: ignore[no-untyped-call]
+_TREE = nt.Tuple((_F2, _F1, _F1, _I1, _I1, _I1))  # type: ignore[no-untyped-call]
+
+# Costs closer than this (metres) count as equal.
+COST_EPS = 1e-9
 
 GridArgs = tuple[BoolArray, BoolArray, float, float, float, float, float]
+#: A tree's arrays: position (N, 2), yaw, cost, parent, first child, next sibling (-1: none).
+TreeArrays = tuple[FloatArray, FloatArray, FloatArray, IntArray, IntArray, IntArray]
 
 
 def grid_args(grid: OccupancyGrid) -> GridArgs:
@@ -326,3 +335,117 @@ def checked_arc(
     if not (ok and arc_free(x1, y1, yaw, curv, arc_len, grid)):
         return np.inf, end_yaw
     return arc_len, end_yaw
+
+
+@numba.njit(_I1(_I1, _I1, _I), cache=True)
+def _descendants(first_child: IntArray, next_sibling: IntArray, node: int) -> IntArray:
+    """The descendants of ``node`` (itself excluded), breadth first: parents before children."""
+    out = np.empty(first_child.size, dtype=np.intp)
+    head, tail = 0, 0
+    current = node
+    while True:
+        child = first_child[current]
+        while child >= 0:
+            out[tail] = child
+            tail += 1
+            child = next_sibling[child]
+        if head == tail:
+            return out[:tail]
+        current = out[head]
+        head += 1
+
+
+@numba.njit(nt.void(_TREE, _I, _I), cache=True)
+def link(tree: TreeArrays, node: int, parent: int) -> None:
+    """Make ``node`` the first child of ``parent`` (children's order means nothing to the planners)."""
+    _, _, _, parents, first_child, next_sibling = tree
+    parents[node] = parent
+    next_sibling[node] = first_child[parent]
+    first_child[parent] = node
+
+
+@numba.njit(nt.void(_TREE, _I), cache=True)
+def _unlink(tree: TreeArrays, node: int) -> None:
+    """Take ``node`` out of its parent's children."""
+    _, _, _, parents, first_child, next_sibling = tree
+    p = parents[node]
+    if first_child[p] == node:
+        first_child[p] = next_sibling[node]
+        return
+    child = first_child[p]
+    while next_sibling[child] != node:
+        child = next_sibling[child]
+    next_sibling[child] = next_sibling[node]
+
+
+@numba.njit(_I(_TREE, _I, _F, _F, _B, _I, _F, _F, _F, _F, _GRID), cache=True)
+def extend_star(
+    tree: TreeArrays,
+    size: int,
+    tx: float,
+    ty: float,
+    ahead: bool,
+    candidates: int,
+    step: float,
+    gamma: float,
+    max_alpha: float,
+    min_turning_radius: float,
+    grid: GridArgs,
+) -> int:
+    """RRT*'s steps 2-4 (:mod:`mrs_nav.trees.rrt_star`) towards ``(tx, ty)`` on the first ``size`` nodes of
+    ``tree``: steer from the nearest node (with ``ahead``, the nearest of the ``candidates`` nearest that faces the
+    target) by at most ``step``, choose the cheapest valid parent among the nodes within
+    ``min(step, gamma sqrt(log n / n))``, add the node as number ``size`` (the arrays must have room for it) and
+    rewire the other near nodes through it when their subtrees stay valid. Returns the new node's id or -1."""
+    position, yaw, cost, parents, first_child, next_sibling = tree
+    ids, dist = nearest_k(position, size, tx, ty, candidates)
+    k = 0
+    if ahead:
+        for m in range(ids.size):
+            j = ids[m]
+            if math.cos(yaw[j]) * (tx - position[j, 0]) + math.sin(yaw[j]) * (ty - position[j, 1]) > 0.0:
+                k = m
+                break
+    nearest, d = ids[k], dist[k]
+    if d <= COST_EPS:
+        return -1
+    xn, yn = tx, ty
+    if d > step:
+        xn = position[nearest, 0] + (tx - position[nearest, 0]) * (step / d)
+        yn = position[nearest, 1] + (ty - position[nearest, 1]) * (step / d)
+    if not lookup_one(xn, yn, grid[0], grid):
+        return -1
+    radius = min(step, gamma * math.sqrt(math.log(size + 1) / (size + 1)))
+    near = within_radius(position, size, xn, yn, radius)
+    if not np.any(near == nearest):
+        near = np.append(near, nearest)
+    parent, new_yaw, new_cost = best_parent(near, position, yaw, cost, xn, yn, max_alpha, min_turning_radius, grid)
+    if parent < 0:
+        return -1
+    new = size
+    position[new, 0], position[new, 1] = xn, yn
+    yaw[new], cost[new] = new_yaw, new_cost
+    link(tree, new, parent)
+    others = near[near != parent]
+    if others.size == 0:
+        return new
+    rewires, yaws, costs = rewire_candidates(others, position, cost, new, new_yaw, max_alpha, min_turning_radius, grid)
+    for m in range(rewires.size):
+        j = rewires[m]
+        # An earlier rewire of this loop may have made j cheaper already.
+        if costs[m] < cost[j] - COST_EPS and rederive_subtree(
+            _descendants(first_child, next_sibling, j),
+            j,
+            yaws[m],
+            costs[m],
+            parents,
+            position,
+            yaw,
+            cost,
+            max_alpha,
+            min_turning_radius,
+            grid,
+        ):
+            _unlink(tree, j)
+            link(tree, j, new)
+    return new

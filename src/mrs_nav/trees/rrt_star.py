@@ -42,7 +42,7 @@ from mrs_nav.trees.rrt import check_budget, check_query, failed, sample_random_p
 from mrs_nav.trees.tree import ArcTree, Search
 
 # Costs closer than this (metres) count as equal.
-_EPS = 1e-9
+_EPS = kernels.COST_EPS
 # How many nearest nodes a guided target may be steered from.
 _AHEAD_CANDIDATES = 8
 # Informed samples are drawn this many at a time, for at most this many batches before falling back to the map.
@@ -142,88 +142,37 @@ class _Planner:
         self.gamma = config.gamma if config.gamma is not None else default_gamma(grid)
         self.goal_node = -1
         self.grid_args = kernels.grid_args(grid)
+        self.limit = arcs.alpha_limit(config.max_alpha)
 
     def extend(self, target: FloatArray, ahead: bool = False) -> int:
-        """Steps 2-4 towards ``target``; returns the new node's id or -1.
+        """Steps 2-4 towards ``target`` (compiled: :func:`mrs_nav.trees.kernels.extend_star`); returns the new
+        node's id or -1.
 
         With ``ahead``, the step starts from the nearest of the few nearest nodes that faces the target (a
         guided target lies ahead of the frontier, and a node facing away from it cannot reach it by an arc).
         """
         tree = self.tree
-        ids, dist = tree.nearest(target, _AHEAD_CANDIDATES if ahead else 1)
-        k = 0
-        if ahead:
-            delta = target - tree.position[ids]
-            facing = np.cos(tree.yaw[ids]) * delta[:, 0] + np.sin(tree.yaw[ids]) * delta[:, 1] > 0.0
-            k = int(np.argmax(facing))
-        nearest, d = int(ids[k]), float(dist[k])
-        if d <= _EPS:
-            return -1
-        x_new = (
-            target
-            if d <= self.config.step
-            else tree.position[nearest] + (target - tree.position[nearest]) * (self.config.step / d)
-        )
-        if not kernels.lookup_one(x_new[0], x_new[1], self.grid_args[0], self.grid_args):
-            return -1
-        n = len(tree)
-        radius = min(self.config.step, self.gamma * math.sqrt(math.log(n + 1) / (n + 1)))
-        near = tree.within(x_new, radius)
-        if nearest not in near:
-            near = np.append(near, nearest)
-        # Step 3: the cheapest valid parent (compiled; collision checks lazily in order of cost).
-        limit = arcs.alpha_limit(self.config.max_alpha)
-        parent, yaw, cost = kernels.best_parent(
-            near,
-            tree.position,
-            tree.yaw,
-            tree.cost,
-            x_new[0],
-            x_new[1],
-            limit,
+        tree.reserve()
+        new = kernels.extend_star(
+            tree.arrays,
+            tree.size,
+            float(target[0]),
+            float(target[1]),
+            ahead,
+            _AHEAD_CANDIDATES if ahead else 1,
+            self.config.step,
+            self.gamma,
+            self.limit,
             self.config.min_turning_radius,
             self.grid_args,
         )
-        if parent < 0:
+        if new < 0:
             return -1
-        new = tree.add(x_new, yaw, parent, cost)
-        if self.goal_node < 0 and float(np.hypot(*(x_new - self.goal))) <= _EPS:
+        tree.size += 1
+        x, y = tree.position[new]
+        if self.goal_node < 0 and math.hypot(x - self.goal[0], y - self.goal[1]) <= _EPS:
             self.goal_node = new
-        # Step 4: rewire the other near nodes through x_new.
-        others = near[near != parent]
-        if len(others):
-            ids, yaws, costs = kernels.rewire_candidates(
-                others, tree.position, tree.cost, new, yaw, limit, self.config.min_turning_radius, self.grid_args
-            )
-            for j, end_yaw, through in zip(ids.tolist(), yaws.tolist(), costs.tolist(), strict=True):
-                # An earlier rewire of this loop may have made j cheaper already.
-                if through < tree.cost[j] - _EPS:
-                    self.rewire(j, new, end_yaw, through)
         return new
-
-    def rewire(self, node: int, new_parent: int, yaw: float, cost: float) -> bool:
-        """Move ``node`` under ``new_parent`` with ``yaw`` and ``cost`` if its whole subtree stays valid and no
-        node of it gets more expensive (see the module docstring; the check is compiled:
-        :func:`mrs_nav.trees.kernels.rederive_subtree`)."""
-        tree = self.tree
-        ids = np.array([i for level in tree.subtree(node) for i in level], dtype=np.intp)
-        limit = arcs.alpha_limit(self.config.max_alpha)
-        if not kernels.rederive_subtree(
-            ids,
-            node,
-            yaw,
-            cost,
-            tree.parent,
-            tree.position,
-            tree.yaw,
-            tree.cost,
-            limit,
-            self.config.min_turning_radius,
-            self.grid_args,
-        ):
-            return False
-        tree.reparent(node, new_parent)
-        return True
 
     def try_goal(self, node: int) -> None:
         """Connect ``node`` straight to the goal when it is within one step: finds the first path sooner."""
@@ -237,7 +186,7 @@ class _Planner:
             tree.yaw[node],
             self.goal[0],
             self.goal[1],
-            arcs.alpha_limit(self.config.max_alpha),
+            self.limit,
             self.config.min_turning_radius,
             self.grid_args,
         )

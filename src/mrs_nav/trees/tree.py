@@ -31,37 +31,44 @@ class ArcTree:
         self.yaw: FloatArray = np.zeros(capacity)
         self.cost: FloatArray = np.zeros(capacity)
         self.parent: IntArray = np.full(capacity, -1, dtype=np.intp)
-        self.children: list[list[int]] = []
+        # Each node's children as a linked list (first child, next sibling; -1 ends it): arrays the compiled
+        # rewire walks and edits, where lists of lists would stay in Python.
+        self.first_child: IntArray = np.full(capacity, -1, dtype=np.intp)
+        self.next_sibling: IntArray = np.full(capacity, -1, dtype=np.intp)
         self.size = 0
         self.add(root.position, root.yaw, -1, 0.0)
 
     def __len__(self) -> int:
         return self.size
 
+    @property
+    def arrays(self) -> kernels.TreeArrays:
+        """The node arrays as the compiled kernels take them (the arrays themselves, not copies)."""
+        return self.position, self.yaw, self.cost, self.parent, self.first_child, self.next_sibling
+
+    def reserve(self) -> None:
+        """Make room for one more node (doubling the arrays when they are full)."""
+        if self.size < len(self.yaw):
+            return
+        grow = len(self.yaw)
+        self.position = np.concatenate([self.position, np.zeros((grow, 2))])
+        self.yaw = np.concatenate([self.yaw, np.zeros(grow)])
+        self.cost = np.concatenate([self.cost, np.zeros(grow)])
+        self.parent = np.concatenate([self.parent, np.full(grow, -1, dtype=np.intp)])
+        self.first_child = np.concatenate([self.first_child, np.full(grow, -1, dtype=np.intp)])
+        self.next_sibling = np.concatenate([self.next_sibling, np.full(grow, -1, dtype=np.intp)])
+
     def add(self, position: npt.ArrayLike, yaw: float, parent: int, cost: float) -> int:
         """Append a node and return its id."""
-        if self.size == len(self.yaw):
-            grow = len(self.yaw)
-            self.position = np.concatenate([self.position, np.zeros((grow, 2))])
-            self.yaw = np.concatenate([self.yaw, np.zeros(grow)])
-            self.cost = np.concatenate([self.cost, np.zeros(grow)])
-            self.parent = np.concatenate([self.parent, np.full(grow, -1, dtype=np.intp)])
+        self.reserve()
         i = self.size
         self.position[i] = position
         self.yaw[i] = yaw
         self.cost[i] = cost
-        self.parent[i] = parent
-        self.children.append([])
         if parent >= 0:
-            self.children[parent].append(i)
+            kernels.link(self.arrays, i, parent)
         self.size += 1
         return i
-
-    def reparent(self, node: int, new_parent: int) -> None:
-        """Move ``node`` (with its subtree) under ``new_parent``; yaws and costs are the caller's to update."""
-        self.children[int(self.parent[node])].remove(node)
-        self.parent[node] = new_parent
-        self.children[new_parent].append(node)
 
     def nearest(self, point: FloatArray, k: int = 1) -> tuple[IntArray, FloatArray]:
         """Ids and distances of the ``k`` nodes nearest to ``point`` (fewer when the tree is smaller), nearest first."""
@@ -70,15 +77,6 @@ class ArcTree:
     def within(self, point: FloatArray, radius: float) -> IntArray:
         """Ids of the nodes within ``radius`` metres of ``point`` (in id order)."""
         return kernels.within_radius(self.position, self.size, float(point[0]), float(point[1]), radius)
-
-    def subtree(self, node: int) -> list[list[int]]:
-        """The descendants of ``node`` level by level (``node`` itself excluded)."""
-        levels = []
-        frontier = self.children[node]
-        while frontier:
-            levels.append(frontier)
-            frontier = [c for n in frontier for c in self.children[n]]
-        return levels
 
     def branch(self, node: int) -> IntArray:
         """Node ids from the root to ``node``."""

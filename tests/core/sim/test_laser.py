@@ -1,4 +1,5 @@
-"""The laser against the analytic distances in the course arena, REP 117 readings and the noise model."""
+"""The laser against analytic distances (the course arena, a turned box, another robot), what its height lets it
+see, REP 117 readings and the noise model."""
 
 from __future__ import annotations
 
@@ -9,8 +10,9 @@ import numpy as np
 import pytest
 
 from mrs_nav.geometry import FloatArray, Pose2D
-from mrs_nav.maps.world import load_world
-from mrs_nav.sim import LaserParams, Simulator, SimulatorConfig
+from mrs_nav.maps.world import Box, World, load_world
+from mrs_nav.sim import LaserParams, MultiRobotSimulator, Simulator, SimulatorConfig
+from mrs_nav.sim.laser import cast_rays
 
 ARENA = Path(__file__).resolve().parents[3] / "worlds" / "simple.world"
 HALF = 2.0  # inner wall faces at +-2 m
@@ -75,3 +77,61 @@ def test_a_wall_closer_than_range_min_reads_minus_inf() -> None:
     assert ranges[180] == -math.inf  # beam 180 looks backwards, at the wall
     assert np.all(np.isfinite(ranges[150:210]) | np.isneginf(ranges[150:210]))
     assert ranges[0] == math.inf  # straight ahead the west wall is 3.93 m away: beyond range_max
+
+
+EXACT = SimulatorConfig(laser=LaserParams(noise_sigma=0.0))
+
+
+def test_a_box_turned_45_degrees_is_seen_as_a_diamond() -> None:
+    # a 0.4 m square turned 45 degrees, centred 2 m ahead: its near corner is on beam 0, and a beam at angle
+    # theta > 0 meets the face x - y = cx - d (d = half the diagonal) at t = (cx - d - ox) / (cos - sin)
+    cx, d = 2.0, 0.2 * math.sqrt(2.0)
+    box = Box("diamond", cx, 0.0, 0.5, math.pi / 4.0, 0.4, 0.4, 1.0)
+    sim = Simulator(World("diamond", (box,), ()), EXACT, Pose2D(0.0, 0.0, 0.0))
+    ranges = sim.scan_now().ranges
+    ox = EXACT.laser.mount_x
+    theta = EXACT.laser.angles()[1:8]
+    expected = (cx - d - ox) / (np.cos(theta) - np.sin(theta))
+    assert ranges[0] == pytest.approx(cx - d - ox, abs=1e-3)
+    np.testing.assert_allclose(ranges[1:8], expected, atol=1e-3)
+    assert np.isinf(ranges[20:340]).all()  # nothing else in the world
+
+
+def test_another_robot_in_front_is_a_circle_of_its_radius() -> None:
+    # the second robot 1.5 m ahead, turned: its chassis is the upright cylinder of radius 0.105 m around its
+    # base_footprint, whatever its heading
+    fleet = MultiRobotSimulator(World("empty", (), ()), EXACT, [Pose2D(0.0, 0.0, 0.0), Pose2D(1.5, 0.2, 1.0)])
+    ranges = fleet.robots[0].scan_now().ranges
+    ox, r = EXACT.laser.mount_x, 0.105
+    angles = EXACT.laser.angles()
+    dx, dy = np.cos(angles), np.sin(angles)
+    b = (ox - 1.5) * dx + (0.0 - 0.2) * dy
+    disc = b * b - ((ox - 1.5) ** 2 + 0.2**2 - r * r)
+    hit = (disc >= 0.0) & (b < 0.0)  # the line through the beam meets the circle, ahead of the scanner
+    expected = np.where(hit, -b - np.sqrt(np.maximum(disc, 0.0)), np.inf)
+    assert hit.sum() >= 5
+    assert np.array_equal(np.isfinite(ranges), hit)
+    np.testing.assert_allclose(ranges[hit], expected[hit], atol=1e-3)
+
+
+def test_only_shapes_spanning_the_scanner_height_are_seen() -> None:
+    # a low box (top at 0.15 m, below the scanner at 0.182 m) and a floating one (bottom at 0.2 m) are invisible
+    low = Box("low", 1.0, 0.0, 0.075, 0.0, 0.3, 0.3, 0.15)
+    high = Box("high", 0.0, 1.0, 0.5, 0.0, 0.3, 0.3, 0.6)
+    tall = Box("tall", -1.0, 0.0, 0.5, 0.0, 0.3, 0.3, 1.0)
+    sim = Simulator(World("heights", (low, high, tall), ()), EXACT, Pose2D(0.0, 0.0, 0.0))
+    ranges = sim.scan_now().ranges
+    assert np.isinf(ranges[0])
+    assert np.isinf(ranges[90])
+    assert ranges[180] == pytest.approx(1.0 - 0.15 + EXACT.laser.mount_x, abs=1e-9)
+
+
+def test_a_ray_starting_inside_a_shape_reports_its_exit_as_ode_does() -> None:
+    dx, dy = np.array([1.0, 0.0]), np.array([0.0, 1.0])
+    none = np.zeros((0, 5))
+    circle = np.array([[0.1, 0.0, 0.5]])
+    np.testing.assert_allclose(cast_rays(0.0, 0.0, dx, dy, circle, none, 3.5), [0.6, math.sqrt(0.24)])
+    square = np.array([[0.0, 0.0, 0.0, 0.3, 0.2]])
+    np.testing.assert_allclose(cast_rays(0.0, 0.0, dx, dy, np.zeros((0, 3)), square, 3.5), [0.3, 0.2])
+    # beyond range_max: no hit
+    assert np.isinf(cast_rays(0.0, 0.0, dx, dy, np.array([[5.0, 0.0, 0.5]]), none, 3.5)).all()

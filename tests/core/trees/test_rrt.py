@@ -42,7 +42,14 @@ def assert_valid_path(path: FloatArray, grid: OccupancyGrid, start: Pose2D, goal
 
 
 def assert_valid_tree(tree: ArcTree, grid: OccupancyGrid) -> None:
-    """Every edge is a feasible, collision-free arc whose end yaw is the child's yaw; costs add up."""
+    """Every edge is a feasible, collision-free arc whose end yaw is the child's yaw; costs add up; each node's
+    linked list of children holds exactly the nodes whose parent it is (after every rewire)."""
+    for node in range(len(tree)):
+        children, child = [], tree.first_child[node]
+        while child >= 0:
+            children.append(int(child))
+            child = tree.next_sibling[child]
+        assert sorted(children) == np.flatnonzero(tree.parent[: len(tree)] == node).tolist()
     edges = tree.edges()
     child = np.arange(1, len(tree))
     assert np.allclose(wrap_angles(edges.end_yaw - tree.yaw[child]), 0.0, atol=1e-9)
