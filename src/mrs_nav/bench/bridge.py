@@ -48,6 +48,13 @@ TARGET_P50_MS, TARGET_P99_MS = 0.5, 3.0
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--duration", type=duration_option, default=60.0, help="measured seconds (default 60)")
+    parser.add_argument(
+        "--floors",
+        type=duration_option,
+        default=None,
+        help="then measure the floors under it for this many seconds each (sockets; Zenoh TCP/TLS, "
+        "universal/lowlatency transport; no ROS, no bridge) and add them to the section",
+    )
 
 
 def rss_mb(pid: int) -> float:
@@ -58,7 +65,7 @@ def rss_mb(pid: int) -> float:
     raise MrsNavError(f"no VmRSS for process {pid}")
 
 
-def _tls_files(tmp: Path) -> tuple[Path, Path]:
+def tls_files(tmp: Path) -> tuple[Path, Path]:
     """Zenoh JSON5 files of the bridge (router, mutual TLS) and of its remote clients, with fresh certificates."""
     ca = make_ca(tmp / "pki")
     server, client = make_cert(ca, tmp / "pki", "bridge", ("127.0.0.1",)), make_cert(ca, tmp / "pki", "client")
@@ -132,12 +139,17 @@ class Receiver:
 
 def run(args: argparse.Namespace) -> str:
     with tempfile.TemporaryDirectory(prefix="mrs_nav_bench_bridge_") as tmp:
-        return _measure(Path(tmp), args.duration)
+        body = _measure(Path(tmp), args.duration)
+        if args.floors:
+            from mrs_nav.bench import bridge_floor  # noqa: PLC0415 - it imports this module
+
+            body += "\n" + bridge_floor.measure(Path(tmp), args.floors)
+        return body
 
 
 def _measure(tmp: Path, duration: float) -> str:
     endpoint = f"tls/127.0.0.1:{free_port()}"
-    bridge_tls, client_tls = _tls_files(tmp)
+    bridge_tls, client_tls = tls_files(tmp)
     config = tmp / "bridge.yaml"
     config.write_text(json.dumps({"mode": "router", "listen": [endpoint], "zenoh_config": str(bridge_tls)}))
     rss: list[tuple[float, float]] = []
@@ -147,10 +159,10 @@ def _measure(tmp: Path, duration: float) -> str:
         bridge = stack.enter_context(process(bridge_cmd, env, tmp / "zenoh_bridge.log"))
         connect_when_up(endpoint, str(client_tls), bridge).close()
         subscribers = [
-            stack.enter_context(process(_subscriber_command(endpoint, client_tls, tmp, i), env, tmp / f"sub{i}.log"))
+            stack.enter_context(process(subscriber_command(endpoint, client_tls, tmp, i), env, tmp / f"sub{i}.log"))
             for i in range(SUBSCRIBERS)
         ]
-        _wait_ready(tmp, subscribers)
+        wait_ready(tmp, subscribers)
         out = tmp / "peer.json"
         peer_cmd = [sys.executable, "-m", "mrs_nav.ros.bridge_bench_peer", "--out", str(out)]
         with process([*peer_cmd, "--duration", str(duration)], env, tmp / "peer.log") as peer:
@@ -179,14 +191,14 @@ def _tail(log: Path) -> str:
     return log.read_text(errors="replace")[-2000:]
 
 
-def _subscriber_command(endpoint: str, client_tls: Path, tmp: Path, i: int) -> list[str]:
+def subscriber_command(endpoint: str, client_tls: Path, tmp: Path, i: int) -> list[str]:
     return [
         sys.executable, "-m", "mrs_nav.bench.bridge_subscriber", "--connect", endpoint,
         "--zenoh-config", str(client_tls), "--ready", str(tmp / f"sub{i}.ready"), "--out", str(tmp / f"sub{i}.json"),
     ]  # fmt: skip
 
 
-def _wait_ready(tmp: Path, subscribers: list[subprocess.Popen[bytes]]) -> None:
+def wait_ready(tmp: Path, subscribers: list[subprocess.Popen[bytes]]) -> None:
     """Until every remote subscriber has subscribed (its ready file), at most 60 s."""
     deadline = time.monotonic() + 60.0
     for i, subscriber in enumerate(subscribers):

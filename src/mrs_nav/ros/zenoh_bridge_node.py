@@ -48,7 +48,7 @@ from mrs_nav.bridge.keys import (
     types_key,
 )
 from mrs_nav.bridge.rate_limit import RateLimiter
-from mrs_nav.bridge.session import open_session, zenoh_config
+from mrs_nav.bridge.session import open_session, refuse_lowlatency, zenoh_config
 from mrs_nav.bridge.wire import encode_attachment, encode_definition, encode_status, encoding_text, schema_of
 from mrs_nav.errors import MrsNavError
 
@@ -136,7 +136,8 @@ class ZenohBridgeNode:
 
     # --- life cycle -------------------------------------------------------------------------------------
     def start(self) -> None:
-        zenoh_config(self.settings, self.config.zenoh_config)  # raises now if the configuration cannot work
+        # Raise now if the configuration cannot work.
+        refuse_lowlatency(zenoh_config(self.settings, self.config.zenoh_config), self.config.zenoh_config)
         for rule in self.config.inbound:
             msg_class = get_message_class(rule.type)
             if msg_class is None:
