@@ -289,7 +289,8 @@ def _report(
     return (
         f"{duration:g} s measured after a 1 s warm-up; added latency = Zenoh receive time minus a direct rospy "
         f"subscriber's receive time for the same message, over {SUBSCRIBERS} remote subscribers (each a process "
-        "with its own client session, its callback run on the Zenoh thread that read the sample) of the bridge "
+        "with its own client session and one subscriber per topic, its callback run on the Zenoh thread that read "
+        "the sample) of the bridge "
         "running as the robot's Zenoh router with mutual TLS, its access control on and its default settings "
         f"(loopback, one machine).\n\n{table}\n\n"
         f"All topics: added latency p50 {p50:.3f} ms, p99 {p99:.3f} ms; {lost_total} lost. Split at the bridge's "
