@@ -2,9 +2,10 @@
 
 Run as ``python -m mrs_nav.bench.bridge_subscriber --connect ENDPOINT --zenoh-config FILE --ready FILE --out FILE``
 once the bridge listens. It opens its own client session (TLS and certificates from the Zenoh JSON5 file),
-subscribes to ``mrs_nav/**``, creates the ``--ready`` file, and on SIGINT writes what it received
-(:meth:`mrs_nav.bench.bridge.Received.to_json`): per topic and ``header.seq`` its wall-clock receive time and the
-bridge's. Its Zenoh callback runs under its own interpreter lock only, so no other subscriber delays it.
+subscribes to each topic (:meth:`mrs_nav.bench.bridge.Receiver.subscribe`), creates the ``--ready`` file, and
+on SIGINT writes what it received (:meth:`mrs_nav.bench.bridge.Received.to_json`): per topic and
+``header.seq`` its wall-clock receive time and the bridge's. Its Zenoh callbacks run under its own interpreter
+lock only, so no other subscriber delays them.
 """
 
 from __future__ import annotations
@@ -12,8 +13,6 @@ from __future__ import annotations
 import argparse
 import signal
 from pathlib import Path
-
-import zenoh
 
 from mrs_nav.bench.bridge import Receiver
 from mrs_nav.bridge.session import open_client_session
@@ -29,9 +28,7 @@ def main(argv: list[str] | None = None) -> int:
     receiver = Receiver()
     session = open_client_session([args.connect], "client", args.zenoh_config)
     try:
-        # Called on the Zenoh thread that read the sample, not handed to a Python thread first (zenoh-python's
-        # default): one thread wake-up less per sample, which a low-latency remote subscriber would choose too.
-        session.declare_subscriber("mrs_nav/**", zenoh.handlers.Callback(receiver, indirect=False))
+        receiver.subscribe(session)
         Path(args.ready).touch()
         signal.pause()  # the bench's SIGINT ends the wait (KeyboardInterrupt)
     except KeyboardInterrupt:

@@ -3,7 +3,7 @@
 Starts its own roscore, ``mrs-nav router`` on a free loopback port, one zenoh_bridge per robot namespace
 (``tb3_0`` ... as a client of the router, keys ``mrs_nav/tb3_i/...``), a ROS peer
 (:mod:`mrs_nav.ros.bridge_bench_peer`) that publishes each robot's /odom 100 Hz, /scan 5 Hz and /map 1 Hz and
-subscribes to them directly, and here one client session of the router subscribed to each ``mrs_nav/tb3_i/**``:
+subscribes to them directly, and here one client session of the router subscribed to each robot's topics:
 what ``mrs-nav monitor --fleet`` opens. Per message (matched by ``header.seq``) the added latency is the Zenoh receive
 time minus the direct ROS subscriber's, both wall clock on this machine; a message is lost if it never arrives.
 Plain TCP on loopback (the single-robot ``bench bridge`` measures TLS).
@@ -61,8 +61,7 @@ def _measure(tmp: Path, robots: list[str], duration: float) -> str:
         ]
         session = connect_when_up(endpoint, "", router)
         stack.callback(session.close)
-        for robot in robots:  # per robot, as monitor --fleet does: a bridge's ACL admits only its own prefix
-            session.declare_subscriber(f"mrs_nav/{robot}/**", receiver)
+        receiver.subscribe(session)  # per topic, under each robot's prefix (a bridge's ACL admits only its own)
         peer_cmd = [sys.executable, "-m", "mrs_nav.ros.bridge_bench_peer", "--out", str(out),
                     "--namespaces", ",".join(robots), "--duration", str(duration)]  # fmt: skip
         with process(peer_cmd, env, tmp / "peer.log") as peer:

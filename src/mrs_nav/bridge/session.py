@@ -65,6 +65,22 @@ def _check_tls(config: zenoh.Config, config_file: str) -> None:
             raise InvalidInputError(f"transport.link.tls.{key} {tls[key]}: no such file ({source})")
 
 
+def refuse_lowlatency(config: zenoh.Config, config_file: str = "") -> None:
+    """Raise InvalidInputError if ``config`` turns on Zenoh's ``transport/unicast/lowlatency``, for the bridge.
+
+    That transport writes each message as one frame and has no fragmentation: a message above the negotiated
+    batch size (at most 64 KiB; a 384 x 384 map is 147 KB) makes the receiver drop the link ("Batch len is
+    invalid"), so every subscriber loses what was in flight while its session reconnects. (A remote user's
+    session asking for it alone is harmless: both ends must, or the link stays on the default transport.)
+    """
+    if json.loads(config.get_json("transport/unicast/lowlatency")):
+        source = f"zenoh_config {config_file}" if config_file else "the Zenoh settings"
+        raise InvalidInputError(
+            f"{source}: transport.unicast.lowlatency cannot carry messages above 64 KiB (a map) without dropping "
+            "the link; the bridge needs the default transport"
+        )
+
+
 def open_session(settings: Mapping[str, Any], config_file: str = "") -> zenoh.Session:
     """Open a session with ``settings`` over ``config_file`` (see :func:`zenoh_config`)."""
     config = zenoh_config(settings, config_file)

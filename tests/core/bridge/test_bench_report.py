@@ -30,7 +30,7 @@ def test_report_splits_added_latency_at_the_bridges_receive_time() -> None:
     direct: dict[str, dict[str, float]] = {topic: {} for topic in TOPICS}
     try:
         for receiver in receivers:
-            remote.declare_subscriber("mrs_nav/**", receiver)
+            receiver.subscribe(remote)
         publisher = bridge.declare_publisher("mrs_nav/odom", express=True)
         time.sleep(0.5)  # the subscriptions reach the publisher's session
         for seq in SEQS:

@@ -17,11 +17,11 @@ import zenoh
 import zenoh.ext
 
 from mrs_nav.bridge.certs import KeyPair, make_ca, make_cert
-from mrs_nav.bridge.config import BridgeConfig
+from mrs_nav.bridge.config import BridgeConfig, zenoh_settings
 from mrs_nav.bridge.decoder import noetic_store
 from mrs_nav.bridge.keys import publish_key, status_key, topic_key
 from mrs_nav.bridge.monitor import RemoteMonitor, serialize_goal
-from mrs_nav.bridge.session import open_client_session, open_session, zenoh_config
+from mrs_nav.bridge.session import open_client_session, open_session, refuse_lowlatency, zenoh_config
 from mrs_nav.bridge.wire import encode_attachment, encode_status, encoding_text
 from mrs_nav.errors import InvalidInputError
 from tests.core.bridge.test_monitor import answer_types, grid, odometry
@@ -203,3 +203,42 @@ def test_a_tls_endpoint_without_certificates_is_one_clear_error(tmp_path: Path) 
     bad.write_text("{transport: {link: {tls: {root_ca_certificate: 3}}}")
     with pytest.raises(InvalidInputError, match=re.escape(str(bad))):
         zenoh_config(config.zenoh_settings({}), str(bad))
+
+
+LOWLATENCY = {"transport": {"unicast": {"lowlatency": True, "qos": {"enabled": False}}}}
+
+
+def test_zenoh_lowlatency_transport_is_refused_with_one_clear_error(tmp_path: Path) -> None:
+    settings = BridgeConfig.from_mapping({}).zenoh_settings({})
+    lowlatency = tmp_path / "lowlatency.json5"
+    lowlatency.write_text(json.dumps(LOWLATENCY))
+    with pytest.raises(InvalidInputError, match=rf"zenoh_config {re.escape(str(lowlatency))}: .*lowlatency cannot"):
+        refuse_lowlatency(zenoh_config(settings, str(lowlatency)), str(lowlatency))
+    refuse_lowlatency(zenoh_config(settings))  # the default transport passes
+
+
+@pytest.mark.parametrize(("transport", "map_arrives"), [("universal", True), ("lowlatency", False)])
+def test_zenoh_lowlatency_transport_drops_the_link_on_a_message_above_the_batch_size(
+    tmp_path: Path, transport: str, map_arrives: bool
+) -> None:
+    """Why the bridge refuses it: a map-sized sample over lowlatency links never arrives (the link is dropped and
+    reconnected), while the default (universal) transport fragments it. Small samples after it arrive either way."""
+    config_file = ""
+    if transport == "lowlatency":
+        config_file = str(tmp_path / "lowlatency.json5")
+        Path(config_file).write_text(json.dumps(LOWLATENCY))
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    router = open_session(zenoh_settings("router", [endpoint], []), config_file)
+    client = open_client_session([endpoint], "client", config_file)
+    try:
+        sizes: list[int] = []
+        client.declare_subscriber("m/**", lambda s: sizes.append(len(s.payload)))
+        publisher = router.declare_publisher("m/x", express=True)
+        wait_for(lambda: publisher.put(b"s") or 1 in sizes, 10.0, "the subscription to reach the router")
+        sizes.clear()
+        publisher.put(bytes(150_000))
+        wait_for(lambda: publisher.put(b"s") or 1 in sizes, 10.0, "a small sample after the big one")
+        assert (150_000 in sizes) == map_arrives
+    finally:
+        client.close()  # type: ignore[no-untyped-call]
+        router.close()  # type: ignore[no-untyped-call]
