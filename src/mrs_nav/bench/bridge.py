@@ -110,7 +110,7 @@ class Receiver:
 
     :meth:`subscribe` declares one subscriber per topic (key ``mrs_nav`` + topic), each with a callback run on
     the Zenoh thread that read the sample and doing only what it must: every sample arrives cold (10 ms apart,
-    other processes in between), where this callback costs ~35 us against ~60 us for one subscriber on
+    other processes in between), where this callback costs 45-50 us against 76-78 us for one subscriber on
     ``mrs_nav/**`` that parses the key and takes a lock (what the README advises remote users too)."""
 
     def __init__(self, topics: Iterable[str] = TOPICS) -> None:
