@@ -59,7 +59,7 @@ def office_localisation(
         "yaw:=0.0",
         "rviz:=false",
         "navigation:=false",
-        "real_time_factor:=0",
+        "real_time_factor:=3",  # bounded: lockstep waits for this test's cmd_vel, not the localisation node
         "lockstep:=true",
     ]
     with ros_master.launch("navigation.launch", *args) as proc:
