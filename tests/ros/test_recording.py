@@ -12,14 +12,16 @@ from typing import Any
 
 import pytest
 
-from mrs_nav.bag.io import bag_topics
-from mrs_nav.bag.salvage import readable_bag
+from mrs_nav.bag.io import bag_topics, read_messages
+from mrs_nav.bag.salvage import readable_bag, salvage_bag
 from mrs_nav.cli.main import main
+from mrs_nav.errors import BagError
 from tests.rosharness import RosMaster, wait_for
 
 pytestmark = pytest.mark.ros
 
 # Topics the simulator alone publishes (no SLAM, no navigation in this test).
+MIN_SCANS = 10  # on disk before the recording is stopped
 SIM_TOPICS = {"/scan", "/odom", "/tf", "/tf_static", "/clock", "/ground_truth/odom"}
 
 
@@ -29,6 +31,17 @@ def _node_pid(master: RosMaster, node: str) -> int:
     code, _, pid = xmlrpc.client.ServerProxy(uri).getPid("/pytest")
     assert code == 1
     return int(pid)
+
+
+def _scans_on_disk(active: Path, probe: Path) -> int:
+    """Scans in the whole chunks ``rosbag record`` has written so far."""
+    try:
+        salvage_bag(active, probe)
+        return sum(1 for _ in read_messages(probe, ["/scan"]))
+    except BagError:
+        return 0
+    finally:
+        probe.unlink(missing_ok=True)
 
 
 def _record(master: RosMaster, rospy: Any, bag: Path, options: str, *, kill: bool) -> None:
@@ -51,6 +64,10 @@ def _record(master: RosMaster, rospy: Any, bag: Path, options: str, *, kill: boo
                 return bool(rospy.get_time() > start + 8.0)
 
             wait_for(turned, 120.0, "8 sim seconds of recording")
+            # rosbag record may subscribe to /scan well after the file is open (at max rate 8 sim seconds can
+            # pass first on a loaded machine): the scans must be on disk before the kill loses its queue.
+            probe = bag.with_name(f"{bag.stem}-probe.bag")
+            wait_for(lambda: turned() and _scans_on_disk(written, probe) >= MIN_SCANS, 120.0, "scans on disk", 0.5)
             if kill:
                 os.kill(_node_pid(master, "/record"), signal.SIGKILL)
 
