@@ -173,10 +173,11 @@ def _teleport(rospy: Any, drive: Drive, pose: Pose2D) -> None:
         pub.unregister()
 
 
-# Global localisation and kidnapping in the office converge in about 9 of 10 seeds (bench/RESULTS.md: the office
-# is nearly symmetric under half and quarter turns), so each test gives the filter a second try from the same
-# start before it fails: a failure then means a broken node, not one unlucky draw.
-ATTEMPTS = 2
+# In the bench (bench/RESULTS.md) global localisation in the office converges in 9 of 10 seeds and a kidnapped
+# robot is found again in 3 of 4: the office is nearly symmetric under half and quarter turns. Each test gives
+# the filter up to three tries from the same start before it fails (all three miss about 1 run in 64 for the
+# kidnapping): a failure then means a broken node, not unlucky draws.
+ATTEMPTS = 3
 KIDNAP_TO = Pose2D(5.0, 0.0, math.pi / 2.0)  # from the south-west corner to the east corridor, as the bench
 
 
