@@ -105,8 +105,8 @@ def test_a_pose_estimate_half_a_metre_and_30_degrees_off_converges_within_5_s(
 ) -> None:
     rospy, drive = office_localisation
     wait_for(lambda: bool(drive.truth), 30.0, "the ground truth")
-    # From the bench's start (its 1.2-2.4 s), not wherever the tracking test stopped: along a bare stretch of
-    # corridor the scans pin the position down more slowly (a CI run ended 0.102 m off after 5 s).
+    # From the bench's start (where it converges in 1.2-2.4 s), not wherever the tracking test stopped: from
+    # there a CI run ended 0.102 m off after 5 s (why that place converges more slowly is not established).
     _teleport(rospy, drive, START)
     truth = START
     off = Pose2D(truth.x + 0.5 * math.cos(truth.yaw + 1.0), truth.y + 0.5 * math.sin(truth.yaw + 1.0), truth.yaw)
