@@ -110,7 +110,7 @@ def run(args: argparse.Namespace) -> str:
             wall = time.perf_counter() - start
             runs[label] = (wall, len(outcomes), sum(o.verdict == "passed" for o in outcomes), out)
 
-        local = f"{args.workers} local workers"
+        local, cluster_label = f"{args.workers} local workers", f"Dask LocalCluster, {args.workers} workers"
         # The local workers run first, forked from this process while it holds only the imports that
         # `mrs-nav replay` holds when it forks them; after the serial run they would inherit its warmed-up state.
         timed(local, args.workers, None)
@@ -129,12 +129,12 @@ def run(args: argparse.Namespace) -> str:
                 preload=["mrs_nav.replay.batch"],
             ) as cluster,
         ):
-            timed(f"Dask LocalCluster, {args.workers} workers", 1, cluster.scheduler_address)
+            timed(cluster_label, 1, cluster.scheduler_address)
         serial_wall, _, _, serial_out = runs["serial"]
         serial_files = _files(serial_out)
         rows: list[list[object]] = []
         verdicts = []
-        for label in ["serial", local, f"Dask LocalCluster, {args.workers} workers"]:
+        for label in ["serial", local, cluster_label]:
             wall, bags, passed, out = runs[label]
             same = _files(out) == serial_files
             ratio = wall / serial_wall

@@ -233,11 +233,14 @@ def zenoh_settings(
     thread is held off the CPU fall 16 samples behind (160 ms of odometry) before puts wait at all; batches are
     allocated lazily, so an idle link costs nothing.
     """
+    # Checked here, where every session's endpoints pass: Zenoh's own message for a malformed one is a Rust debug
+    # dump naming its source files.
+    listen, connect = [check_endpoint(e) for e in listen], [check_endpoint(e) for e in connect]
     retry_ms = max(100, round(retry_period * 1000))
     return {
         "mode": mode,
-        "listen/endpoints": list(listen),
-        "connect/endpoints": list(connect),
+        "listen/endpoints": listen,
+        "connect/endpoints": connect,
         "connect/retry": {"period_init_ms": 100, "period_max_ms": retry_ms, "period_increase_factor": 2},
         "scouting/multicast/enabled": False,
         "timestamping/enabled": True,

@@ -78,14 +78,12 @@ def register(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     # Imported here so that zenoh, rosbags and matplotlib load only when this command runs.
-    from mrs_nav.bridge.config import check_endpoint  # noqa: PLC0415
     from mrs_nav.bridge.monitor import RemoteMonitor  # noqa: PLC0415
 
     if args.robot is not None and not args.fleet:
         raise InvalidInputError("--robot names a robot of a fleet: add --fleet (or give its --prefix alone)")
     goal = parse_floats(args.send_goal, 3, "--send-goal") if args.send_goal else None
-    # Checked here: Zenoh's own message for a malformed endpoint is a Rust debug dump naming its source files.
-    connect = [check_endpoint(e.strip()) for item in args.connect for e in item.split(",") if e.strip()]
+    connect = [e.strip() for item in args.connect for e in item.split(",") if e.strip()]
     if args.fleet:
         return _run_fleet(args, connect, goal)
     with RemoteMonitor(connect, args.prefix, args.timeout, args.mode, args.zenoh_config) as monitor:

@@ -37,10 +37,10 @@ def register(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     # Imported here so that other commands do not load zenoh.
-    from mrs_nav.bridge.config import DEFAULT_LISTEN, check_endpoint, zenoh_settings  # noqa: PLC0415
+    from mrs_nav.bridge.config import DEFAULT_LISTEN, zenoh_settings  # noqa: PLC0415
     from mrs_nav.bridge.session import open_session  # noqa: PLC0415
 
-    listen = [check_endpoint(e.strip()) for item in args.listen or DEFAULT_LISTEN for e in item.split(",") if e.strip()]
+    listen = [e.strip() for item in args.listen or DEFAULT_LISTEN for e in item.split(",") if e.strip()]
     if not listen:
         raise InvalidInputError("--listen: give at least one endpoint, e.g. tcp/127.0.0.1:7447")
     session = open_session(zenoh_settings("router", listen, []), args.zenoh_config)

@@ -41,8 +41,6 @@ from mrs_nav.trees.guide import CorridorSampler
 from mrs_nav.trees.rrt import check_budget, check_query, failed, sample_random_position
 from mrs_nav.trees.tree import ArcTree, Search
 
-# Costs closer than this (metres) count as equal.
-_EPS = kernels.COST_EPS
 # How many nearest nodes a guided target may be steered from.
 _AHEAD_CANDIDATES = 8
 # Informed samples are drawn this many at a time, for at most this many batches before falling back to the map.
@@ -170,7 +168,7 @@ class _Planner:
             return -1
         tree.size += 1
         x, y = tree.position[new]
-        if self.goal_node < 0 and math.hypot(x - self.goal[0], y - self.goal[1]) <= _EPS:
+        if self.goal_node < 0 and math.hypot(x - self.goal[0], y - self.goal[1]) <= kernels.COST_EPS:
             self.goal_node = new
         return new
 
@@ -249,7 +247,7 @@ def grow_rrt_star(
             guide.reached(tree.position[new])
         planner.try_goal(new)
         g = planner.goal_node
-        if g >= 0 and tree.cost[g] < best_cost - _EPS:
+        if g >= 0 and tree.cost[g] < best_cost - kernels.COST_EPS:
             # Arc cost and sampled-path length differ by the chords' sag (< 0.1 %): the kept path must be
             # shorter in the reported length too, so that the reported length never grows.
             best_cost = float(tree.cost[g])
