@@ -83,7 +83,7 @@ def test_goals_with_headings_then_a_blind_robot_stops(ros_master: RosMaster, ros
             assert truth.moved(died + 0.5, died + 3.0) < 0.01  # stopped within 0.5 s of sim time
             assert client.get_state() == GoalStatus.ACTIVE  # the goal is kept: it resumes when SLAM returns
             status = rospy.wait_for_message("/rrt_navigation/status", String, 10.0).data
-            assert "map->odom correction" in status
+            assert "map->odom correction" in status  # among every reason that holds (a scan can be late under load)
             assert proc.poll() is None
             client.cancel_all_goals()
     finally:

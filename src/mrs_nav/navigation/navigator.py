@@ -16,8 +16,9 @@ onto the goal position (``xy_tolerance_m``) and then turns to the goal heading, 
 are not on the map for planning (:mod:`.obstacles`; a path they block is replanned) and a return ahead closer
 than the robot radius plus ``stop_clearance_m`` stops the robot and makes a new plan. Without a pose, when the
 caller says why to hold (e.g. a stale localisation), or when the last map is older than ``map_timeout_s``, the
-robot is stopped and the goal kept; it resumes when all are back. Times are in seconds of the caller's clock
-(sim time in ROS), distances in metres, angles in radians.
+robot is stopped and the goal kept (a ``HOLDING`` event names why, and again whenever the reason changes); it
+resumes when all are back. Times are in seconds of the caller's clock (sim time in ROS), distances in metres,
+angles in radians.
 
 With ``update(pose, now, defer=True)`` a needed plan is returned as a :class:`PlanRequest` for a worker
 (:meth:`run_plan`, then :meth:`finish_plan`). Meanwhile the robot follows the current path when the plan is only
@@ -104,7 +105,7 @@ class Navigator:
         self._plan_grid: OccupancyGrid | None = None
         self._map_stamp = -math.inf
         self._follower: PathFollower | None = None
-        self._holding = False
+        self._holding: str | None = None  # why the robot is held, as last reported
         self._pending: PlanRequest | None = None
 
     @property
@@ -186,7 +187,7 @@ class Navigator:
         self.path = None
         self._follower = None
         self._approach = None
-        self._holding = False
+        self._holding = None
         self._pending = None  # a plan in flight for this goal is now stale
 
     def _end(self, state: GoalState) -> None:
@@ -203,20 +204,21 @@ class Navigator:
     def update(self, pose: Pose2D | None, now: float, defer: bool = False, hold: str | None = None) -> NavCommand:
         """One control step for the robot at ``pose`` (map frame; ``None`` when unknown) at time ``now``. With
         ``defer`` a needed plan is not made here but returned as the command's ``request`` (module docstring);
-        ``hold`` (why) stops the robot and keeps the goal, as a lost pose does."""
+        ``hold`` (why; a text that stays the same while the cause lasts) stops the robot and keeps the goal, as a
+        lost pose does."""
         if not self._goal.active:
             return NavCommand(0.0, 0.0)
         hold = hold or self._hold_reason(pose, now)
         if hold is not None:
-            if self._holding:
+            if hold == self._holding:
                 return NavCommand(0.0, 0.0)
-            self._holding = True
+            self._holding = hold
             return NavCommand(0.0, 0.0, events=(NavEvent(EventKind.HOLDING, f"stopped: {hold}"),))
         assert pose is not None
         assert self.goal is not None
         events: list[NavEvent] = []
-        if self._holding:
-            self._holding = False
+        if self._holding is not None:
+            self._holding = None
             events.append(NavEvent(EventKind.RESUMED, "pose and map are back; resuming"))
         distance = math.hypot(self.goal[0] - pose.x, self.goal[1] - pose.y)
         if self._approach is None and distance <= self.config.approach_radius_m:
@@ -278,7 +280,7 @@ class Navigator:
             return "no map"
         timeout = self.config.map_timeout_s
         if timeout > 0.0 and now - self._map_stamp > timeout:
-            return f"the map is {now - self._map_stamp:.1f} s old"
+            return f"the map is older than {timeout:.1f} s"
         return None
 
     def replan_reason(self, pose: Pose2D, now: float) -> str | None:

@@ -353,8 +353,10 @@ class RrtNavigationNode:
         return None if correction is None else correction.compose(odom)
 
     def _blind(self, now: float) -> str | None:
-        """Why the robot must stop although it has a pose: its localisation or its laser has gone quiet."""
+        """Why the robot must stop although it has a pose: its localisation or its laser has gone quiet. Every
+        reason that holds is named, so that the status says all of what is wrong, not the first one checked."""
         cfg = self.config
+        reasons = []
         if cfg.correction_freshness_s > 0.0:
             try:
                 stamp = self._tf_buffer.lookup_transform(cfg.map_frame, cfg.odom_frame, rospy.Time(0)).header.stamp
@@ -362,10 +364,14 @@ class RrtNavigationNode:
                 return None  # no pose at all: the navigator holds for that
             age = now - stamp.to_sec()
             if not stamp.is_zero() and age > cfg.correction_freshness_s:
-                return f"the {cfg.map_frame}->{cfg.odom_frame} correction is {age:.2f} s old (localisation lost?)"
+                freshness = cfg.correction_freshness_s
+                reasons.append(
+                    f"the {cfg.map_frame}->{cfg.odom_frame} correction is older than {freshness:.2f} s"
+                    " (localisation lost?)"
+                )
         if cfg.scan_timeout_s > 0.0 and now - self._last_scan > cfg.scan_timeout_s:
-            return f"no laser scan for more than {cfg.scan_timeout_s:.2f} s"
-        return None
+            reasons.append(f"no laser scan for more than {cfg.scan_timeout_s:.2f} s")
+        return "; ".join(reasons) or None
 
     # -- control ----------------------------------------------------------------------------------------------
 

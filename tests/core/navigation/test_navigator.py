@@ -562,7 +562,12 @@ def test_a_hold_from_the_caller_stops_the_robot_and_it_resumes() -> None:
     nav.set_goal(1.5, 1.5, 0.0)
     pose = Pose2D(-1.5, -1.5, 0.0)
     assert nav.update(pose, 0.0).u > 0.0
-    held = nav.update(pose, 0.1, hold="the map->odom correction is 0.4 s old")
+    stale = "the map->odom correction is older than 0.30 s"
+    held = nav.update(pose, 0.1, hold=stale)
     assert (held.u, held.omega) == (0.0, 0.0)
-    assert "0.4 s old" in held.events[0].message
+    assert stale in held.events[0].message
+    assert nav.update(pose, 0.15, hold=stale).events == ()  # said once while the cause lasts
+    both = nav.update(pose, 0.17, hold=f"{stale}; no laser scan for more than 0.40 s")
+    assert (both.u, both.omega) == (0.0, 0.0)
+    assert "no laser scan" in both.events[0].message  # a changed reason is said again
     assert nav.update(pose, 0.2).u > 0.0
