@@ -10,6 +10,8 @@ Odometry: by default the robot's real odometry, integrated from the log's ODOM i
 (:func:`mrs_nav.bag.carmen.read_log`) starting at the first scan's pose, one ``/odom`` per ODOM line that falls
 between two scans in time order plus one at each scan's stamp; a scan with no odometry since the
 previous one (a gap) repeats the previous odometry pose, so the scan matcher has to find that motion alone.
+``odom_scale`` (linear, angular) multiplies every increment: a correction of the wheels' calibration, or a
+known miscalibration to see how a SLAM result depends on the odometry.
 With ``noise`` given (``--odom synthetic``), or when the log has no ODOM lines at all, odometry is synthesised
 from the logged poses' increments with the odometry motion model's noise (:mod:`mrs_nav.motion_model`).
 
@@ -39,6 +41,7 @@ from mrs_nav.slam.scan import LaserScanData
 
 TF = "tf2_msgs/msg/TFMessage"
 FALLBACK_INTERVAL_S = 1.0  # scan interval used to restamp a log that has no increasing stamps at all
+ODOM_SCALE_RANGE = (0.5, 2.0)  # a wheel calibration off by more than a factor of 2 is a wrong number, not a fix
 
 
 @dataclass(frozen=True)
@@ -59,12 +62,19 @@ def carmen_to_bag(
     seed: int = 0,
     *,
     max_range: float | None = None,
+    odom_scale: tuple[float, float] = (1.0, 1.0),
     progress: Callable[[int], None] | None = None,
 ) -> ConversionSummary:
     """Write the scans of ``log`` to ``bag`` (replacing it); odometry from the log unless ``noise`` is given.
 
     ``max_range`` defaults to the log's largest reading (a SICK reports its limit for "no return").
+    ``odom_scale`` multiplies the log's odometry increments (linear, angular); synthetic odometry is not scaled.
     """
+    low, high = ODOM_SCALE_RANGE
+    if not all(low <= f <= high for f in odom_scale):
+        raise InvalidInputError(f"odometry scale {odom_scale}: each factor must be in {low:g}..{high:g}")
+    if noise is not None and odom_scale != (1.0, 1.0):
+        raise InvalidInputError("the odometry scale applies to the log's odometry only, not to synthetic odometry")
     content = read_log(log)
     scans = content.scans
     if not scans:
@@ -82,7 +92,7 @@ def carmen_to_bag(
         noise = OdometryNoise.of(DEFAULT_ALPHAS)
     between: list[list[tuple[float, Pose2D]]] = [[] for _ in scans]
     if noise is None:
-        odom, between = log_odometry(content, stamps)
+        odom, between = log_odometry(content, stamps, odom_scale)
         kind = "log"
         if content.gaps:
             notes.append(f"{log}: {content.gaps} scans have no odometry since the previous scan; odometry held there")
@@ -96,13 +106,18 @@ def carmen_to_bag(
     return ConversionSummary(len(scans), stamps[-1] - stamps[0], kind, tuple(notes))
 
 
-def log_odometry(content: CarmenLog, stamps: list[float]) -> tuple[list[Pose2D], list[list[tuple[float, Pose2D]]]]:
-    """Odometry poses at the scans, integrated from the log's increments from the first scan's pose (a gap
-    holds the pose), and per scan the odometry of the ODOM lines stamped strictly between the previous scan's
-    (repaired) stamp and its own, in increasing time (lines out of that order are left out)."""
+def log_odometry(
+    content: CarmenLog, stamps: list[float], scale: tuple[float, float] = (1.0, 1.0)
+) -> tuple[list[Pose2D], list[list[tuple[float, Pose2D]]]]:
+    """Odometry poses at the scans, integrated from the log's increments (each scaled by ``scale``, linear and
+    angular) from the first scan's pose (a gap holds the pose), and per scan the odometry of the ODOM lines
+    stamped strictly between the previous scan's (repaired) stamp and its own, in increasing time (lines out of
+    that order are left out)."""
     odom = [content.scans[0].pose]
     between: list[list[tuple[float, Pose2D]]] = [[]]
-    for k, path in enumerate(content.odometry[1:], start=1):
+    linear, angular = scale
+    for k, scan_path in enumerate(content.odometry[1:], start=1):
+        path = [(t, Pose2D(p.x * linear, p.y * linear, p.yaw * angular)) for t, p in scan_path]
         previous = odom[-1]
         odom.append(previous.compose(path[-1][1]) if path else previous)
         inside: list[tuple[float, Pose2D]] = []

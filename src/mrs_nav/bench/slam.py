@@ -9,7 +9,9 @@ selected scans, about 0.65 m / 22 degrees apart). Reported: the relations metric
 corrected scans leaves (the corrected poses themselves scored the same way), ATE against the corrected log's
 poses (agreement with another SLAM's output, not ground truth), the map-consistency figure (end points on free
 cells away from walls; the bench fails with an ERROR when it exceeds the broken-map line), peak RSS, CPU time
-per processed scan and the real-time factor by CPU time (the machine is shared). The simulated office: a
+per processed scan and the real-time factor by CPU time (the machine is shared). Then the same log with its
+odometry increments scaled as a wheel calibration 1-2 % off would scale them (``carmen2bag --odom-scale``): how
+far the building's global shape, and so the ATE, moves with small changes of the odometry. The simulated office: a
 scripted 47 m loop with the core simulator (360-beam scans, 1 % wheel odometry noise), ATE, map IoU.
 """
 
@@ -36,7 +38,7 @@ from mrs_nav.sim.simulator import SimulatorConfig
 from mrs_nav.slam.config import SlamConfig
 from mrs_nav.slam.consistency import BROKEN_FRACTION, REVISIT_GAP, revisit_spread
 from mrs_nav.slam.metrics import affine_fit, windowed_ate
-from mrs_nav.slam.relations import load_relations
+from mrs_nav.slam.relations import Relation, load_relations
 from mrs_nav.slam.scan import LaserScanData, split_beams
 from mrs_nav.slam.sim_drive import OFFICE_LOOP_WAYPOINTS, OFFICE_START, drive_with_slam
 from mrs_nav.tables import markdown_table
@@ -57,6 +59,9 @@ MS_TARGET = 20.0  # the simulated office's 360-beam scans
 OFFICE_ATE_M = 0.01  # issue 13: the simulated office loop after closing it
 MEMORY_TARGET_MB = 500.0
 ATE_WINDOW = 20  # scans: about 13 m of the Intel path
+ATE_TARGET_M = 0.05  # issue 13: against the corrected poses
+# (linear, angular) factors on the log's odometry increments: wheel calibrations 1-2 % off, either way.
+ODOM_SCALES = ((0.98, 1.0), (0.99, 1.0), (1.01, 1.0), (1.02, 1.0), (1.0, 0.99), (1.0, 1.01))
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -68,7 +73,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> str:
-    body = _intel(args) + ("" if args.no_office else "\n" + _office())
+    relations = load_relations(args.relations)
+    intel, shipped = _intel(args, relations)
+    body = intel + "\n" + _odometry_sensitivity(args, relations, shipped) + ("" if args.no_office else "\n" + _office())
     # Times on a shared machine depend on the neighbours: say how busy it was.
     load = os.getloadavg()[0]
     return body + f"\nLoad average at the end of the run: {load:.1f} on {os.cpu_count()} cores (other jobs running).\n"
@@ -126,8 +133,8 @@ def _office() -> str:
     )
 
 
-def _intel(args: argparse.Namespace) -> str:
-    relations = load_relations(args.relations)
+def _intel(args: argparse.Namespace, relations: list[Relation]) -> tuple[str, tuple[float, float]]:
+    """The Intel section, and the ATE against the corrected log and the end points on free cells it measured."""
     with tempfile.TemporaryDirectory() as tmp:
         bag = Path(tmp) / "intel.bag"
         conversion = carmen_to_bag(args.log, bag)
@@ -195,9 +202,9 @@ def _intel(args: argparse.Namespace) -> str:
         f"themselves score {scored['relations_reference_trans_mean_m']:.4f} m here: most relations end between "
         "the 910 corrected scans and are bridged by odometry, which sets that floor.\n"
         f"- ATE against the corrected log {summary['ate_rmse_m']:.3f} m: agreement with another SLAM's output "
-        "(the corrected log), target <= 0.05 m: "
-        f"{'PASS' if summary['ate_rmse_m'] <= 0.05 else 'FAIL'}. RPE between consecutive scans against the corrected "
-        "log measures the same agreement, locally; it does not see a loop that failed to close. Aligned in "
+        f"(the corrected log), target <= {ATE_TARGET_M} m: "
+        f"{'PASS' if summary['ate_rmse_m'] <= ATE_TARGET_M else 'FAIL'}. RPE between consecutive scans against the "
+        "corrected log measures the same agreement, locally; it does not see a loop that failed to close. Aligned in "
         f"windows of {ATE_WINDOW} consecutive scans the two trajectories agree to {local_ate:.3f} m (median): "
         "the rest of the ATE is the building's global shape differing between two SLAM outputs, of which the "
         f"corrected log scores {scored['relations_reference_trans_mean_m']:.4f} m on the relations and this "
@@ -232,4 +239,66 @@ def _intel(args: argparse.Namespace) -> str:
         raise InvalidInputError(
             f"bench slam: the Intel map is broken: {free:.3f} of scan end points on free cells (line {BROKEN_FRACTION})"
         )
-    return body
+    return body, (float(summary["ate_rmse_m"]), free)
+
+
+def _odometry_sensitivity(args: argparse.Namespace, relations: list[Relation], shipped: tuple[float, float]) -> str:
+    """The Intel log again with its odometry increments scaled by :data:`ODOM_SCALES`; ``shipped``: the ATE and
+    the end points on free cells with the log's own odometry."""
+    rows: list[list[object]] = []
+    ates, trans, frees = [], [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        bag = Path(tmp) / "intel.bag"
+        for linear, angular in ODOM_SCALES:
+            carmen_to_bag(args.log, bag, odom_scale=(linear, angular))
+            result = replay_slam(bag, INTEL_CONFIG)
+            summary = result.summary()
+            scored = result.relation_errors(relations)
+            affine = affine_fit(*result.truth_pairs())
+            ates.append(float(summary["ate_rmse_m"]))
+            trans.append(float(scored["relations_trans_mean_m"]))
+            frees.append(float(summary["free_endpoint_fraction"]))
+            rows.append(
+                [
+                    f"{linear:g} / {angular:g}",
+                    summary["ate_rmse_m"],
+                    affine.residual_rms_m,
+                    f"{affine.stretch_min:.4f} / {affine.stretch_max:.4f}",
+                    scored["relations_trans_mean_m"],
+                    summary["free_endpoint_fraction"],
+                    summary["loops_closed"],
+                ]
+            )
+    header = [
+        "odometry scale (distance / turn)",
+        "ATE vs corrected log [m]",
+        "same, after an affine fit [m]",
+        "the fit's stretches",
+        "relations trans [m]",
+        "end points on free cells",
+        "loops closed",
+    ]
+    reached = sum(a <= ATE_TARGET_M for a in ates)
+    # Over every run, the log's own odometry included: does the ATE go with the map's own inconsistency?
+    correlation = float(np.corrcoef([shipped[0], *ates], [shipped[1], *frees])[0, 1])
+    consistent = [a for a, f in zip(ates, frees, strict=True) if f <= min(frees) + 0.25 * (max(frees) - min(frees))]
+    verdict = (
+        f"- With the odometry 1-2 % off either way the ATE against the corrected log ranges {min(ates):.3f}-"
+        f"{max(ates):.3f} m (median {float(np.median(ates)):.3f} m; {shipped[0]:.3f} m with the log's own "
+        f"odometry); {reached} of {len(ates)} runs at or below the {ATE_TARGET_M} m target. The relations error "
+        f"stays within {min(trans):.4f}-{max(trans):.4f} m: the relations, all shorter than 2.2 m, do not see "
+        "the building's global shape move.\n"
+        f"- Over these runs and the log's own odometry the ATE goes with the share of end points on free cells "
+        f"(correlation {correlation:.2f}; {min(frees):.4f}-{max(frees):.4f} here, {shipped[1]:.4f} with the "
+        "log's own odometry, all below the broken-map line): part of the ATE is a local inconsistency of the map "
+        "that this figure sees (walls mapped twice a few centimetres apart where passes meet). The runs with the "
+        f"most consistent maps (the lowest quarter of that range) still leave {min(consistent):.3f}-"
+        f"{max(consistent):.3f} m: the rest is the global shape, which agrees with the corrected log (another "
+        "SLAM run's output) only as far as these 910 scans fix it.\n"
+    )
+    return (
+        "### The same log with its odometry scaled (a wheel calibration off; `carmen2bag --odom-scale`)\n\n"
+        + markdown_table(header, rows)
+        + "\n\n"
+        + verdict
+    )

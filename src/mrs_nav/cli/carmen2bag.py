@@ -51,6 +51,15 @@ def register(subparsers: Any) -> None:
             f"(with --odom synthetic; default: {_DEFAULT_NOISE}; 0,0,0,0 gives perfect odometry)"
         ),
     )
+    parser.add_argument(
+        "--odom-scale",
+        default="1,1",
+        metavar="LINEAR,ANGULAR",
+        help=(
+            "multiply the log's odometry increments (distance, turn) by these factors, each in 0.5..2: a wheel "
+            "calibration (with --odom log; default: 1,1)"
+        ),
+    )
     parser.add_argument("--json", action="store_true", help="print a JSON summary")
     parser.set_defaults(handler=run)
 
@@ -59,6 +68,7 @@ def run(args: argparse.Namespace) -> int:
     noise = OdometryNoise.of(parse_floats(args.odom_noise, 4, "--odom-noise"))
     if args.odom == "log" and args.odom_noise != _DEFAULT_NOISE:
         raise InvalidInputError("--odom-noise applies to --odom synthetic only")
+    linear, angular = parse_floats(args.odom_scale, 2, "--odom-scale")
     progress = None
     bar: Any = None
     if sys.stderr.isatty():
@@ -66,7 +76,12 @@ def run(args: argparse.Namespace) -> int:
         progress = bar.update
     try:
         summary = carmen_to_bag(
-            args.log, args.bag, noise if args.odom == "synthetic" else None, args.seed, progress=progress
+            args.log,
+            args.bag,
+            noise if args.odom == "synthetic" else None,
+            args.seed,
+            odom_scale=(linear, angular),
+            progress=progress,
         )
     finally:
         if bar is not None:

@@ -3,6 +3,7 @@ bad lines, an existing bag."""
 
 import itertools
 import json
+import math
 
 import pytest
 
@@ -124,3 +125,46 @@ def test_a_bad_line_is_one_error_naming_file_and_line(edit, match, tmp_path, cap
     assert err[0].startswith(f"ERROR: {log}:{index + 1}: ")
     assert match in err[0]
     assert bag.read_bytes() == b"kept"  # nothing written over the old bag on a refused log
+
+
+def _odom_steps(bag):
+    """Distance and turn between consecutive /odom messages at the scans' stamps."""
+    scans = {t for _, t, _ in read_messages(bag, ["/scan"])}
+    poses = [m.pose.pose for _, t, m in read_messages(bag, ["/odom"]) if t in scans]
+    out = []
+    for a, b in itertools.pairwise(poses):
+        turn = 2.0 * (math.atan2(b.orientation.z, b.orientation.w) - math.atan2(a.orientation.z, a.orientation.w))
+        out.append(
+            (math.hypot(b.position.x - a.position.x, b.position.y - a.position.y), math.remainder(turn, math.tau))
+        )
+    return out
+
+
+def test_odom_scale_multiplies_the_logs_increments(tmp_path, capsys):
+    log = write_log(tmp_path / "a.log", log_lines(drive()[:30], seed=5))
+    plain, scaled = tmp_path / "plain.bag", tmp_path / "scaled.bag"
+    assert main(["carmen2bag", str(log), str(plain)]) == 0
+    assert main(["carmen2bag", str(log), str(scaled), "--odom-scale", "1.1,0.9"]) == 0
+    capsys.readouterr()
+    pairs = list(zip(_odom_steps(plain), _odom_steps(scaled), strict=True))
+    assert sum(d for (d, _), _ in pairs) > 2.0  # it drives
+    assert sum(abs(t) for (_, t), _ in pairs) > 1.0  # and turns
+    for (d, t), (ds, ts) in pairs:
+        assert ds == pytest.approx(1.1 * d, abs=1e-6)
+        assert ts == pytest.approx(0.9 * t, abs=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("args", "match"),
+    [
+        (["--odom-scale", "3,1"], "odometry scale (3.0, 1.0): each factor must be in 0.5..2"),
+        (["--odom-scale", "1"], "--odom-scale: expected 2 numbers"),
+        (["--odom-scale", "1.1,1", "--odom", "synthetic"], "applies to the log's odometry only"),
+    ],
+)
+def test_a_bad_odom_scale_is_one_error_line(args, match, tmp_path, capsys):
+    log = write_log(tmp_path / "a.log", log_lines(drive()[:5]))
+    assert main(["carmen2bag", str(log), str(tmp_path / "a.bag"), *args]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert match in err[0]
