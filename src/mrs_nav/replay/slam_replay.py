@@ -267,8 +267,7 @@ def _plot(result: SlamReplay, estimate: list[Pose2D], png: Path) -> None:
             gt = np.array([[p.x, p.y] for p in paired_truth])
             gt_in_map = align_se2(gt, np.array([[p.x, p.y] for p in paired_estimate])).apply(gt)
             ax.plot(gt_in_map[:, 0], gt_in_map[:, 1], "g--", lw=0.8, label="ground truth")
-        xs = np.concatenate([est[:, 0]])
-        ys = np.concatenate([est[:, 1]])
+        xs, ys = est[:, 0], est[:, 1]
         known = np.nonzero(occ >= 0)
         if known[0].size:
             xs = np.concatenate([xs, grid.origin_x + known[1] * grid.resolution])
