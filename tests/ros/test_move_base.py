@@ -21,8 +21,11 @@ pytestmark = pytest.mark.ros
 MAX_RATE = ("real_time_factor:=0", "lockstep:=true")
 XY_TOLERANCE, YAW_TOLERANCE = 0.05, 0.17  # m, rad: the node's defaults (move_base's names)
 MARGIN = 1.0  # m of free map outside the arena's walls, where no path leads
-SLACK = 0.01  # m the pose estimate (odometry) and the truth may differ over a short trip
-DRIFT_SLACK = 0.1  # m the same after the tens of metres of the earlier tests (identity map->odom, no SLAM)
+SLACK = 0.01  # m the robot may still move after the goal is reached (settling)
+# m the truth may be from the node's estimate (odometry, map -> odom being the identity here: no SLAM): the
+# simulated wheels' slip over the module's trips, which grows with the machine's load (a CI run saw 0.087 m
+# after two 3 m trips)
+DRIFT_SLACK = 0.1
 
 
 def target(rospy: Any, x: float, y: float, yaw: float) -> Any:
@@ -62,6 +65,16 @@ def arena(ros_master: RosMaster, rospy_node: Any) -> Iterator[dict[str, Any]]:
         truth.close()
 
 
+def assert_reached(rospy: Any, truth: TruthTrack, x: float, y: float) -> None:
+    """The tolerance holds for the node's estimate (odometry), and the truth is within the odometry's drift."""
+    from nav_msgs.msg import Odometry
+
+    odom = rospy.wait_for_message("/odom", Odometry, 10.0).pose.pose.position
+    assert math.hypot(odom.x - x, odom.y - y) <= XY_TOLERANCE + SLACK, (x, y, odom.x, odom.y)
+    _, tx, ty = truth.last()
+    assert math.hypot(tx - odom.x, ty - odom.y) <= DRIFT_SLACK, (odom.x, odom.y, tx, ty)
+
+
 def wait_result(arena: dict[str, Any], timeout: float = 150.0) -> int:
     client = arena["client"]
     wait_for(lambda: client.get_state() not in (0, 1), timeout, "the goal to end")  # PENDING, ACTIVE
@@ -79,8 +92,7 @@ def test_goals_with_headings_succeed_within_the_tolerances(arena: dict[str, Any]
         assert wait_result(arena) == GoalStatus.SUCCEEDED, client.get_goal_status_text()
         t0 = rospy.get_time()
         wait_for(lambda t0=t0: rospy.get_time() > t0 + 0.5, 20.0, "the robot to settle")
-        _, tx, ty = truth.last()
-        assert math.hypot(tx - x, ty - y) <= XY_TOLERANCE + SLACK, (x, y, tx, ty)
+        assert_reached(rospy, truth, x, y)
         assert abs(math.remainder(truth.last_yaw() - yaw, 2 * math.pi)) <= YAW_TOLERANCE + 0.02
         assert len(feedback) > 10  # base_position every control period
         assert feedback[-1].base_position.header.frame_id == "map"
@@ -151,7 +163,6 @@ def test_make_plan_plans_without_moving_and_the_costmap_is_published(arena: dict
 
 def test_a_box_put_in_the_way_is_driven_around_without_contact(arena: dict[str, Any]) -> None:
     from actionlib_msgs.msg import GoalStatus
-    from nav_msgs.msg import Odometry
     from visualization_msgs.msg import Marker
 
     rospy, truth, client = arena["rospy"], arena["truth"], arena["client"]
@@ -169,12 +180,7 @@ def test_a_box_put_in_the_way_is_driven_around_without_contact(arena: dict[str, 
     client.send_goal(target(rospy, 1.5, -1.5, 0.0))
     assert wait_result(arena) == GoalStatus.SUCCEEDED, client.get_goal_status_text()
     add.unregister()
-    # The tolerance holds for the node's estimate (odometry, map -> odom being the identity); the truth differs
-    # from it by the odometry's drift over the tens of metres of the earlier tests, which grows with load.
-    odom = rospy.wait_for_message("/odom", Odometry, 10.0).pose.pose.position
-    assert math.hypot(odom.x - 1.5, odom.y + 1.5) <= XY_TOLERANCE + SLACK
-    _, x, y = truth.last()
-    assert math.hypot(x - odom.x, y - odom.y) <= DRIFT_SLACK
+    assert_reached(rospy, truth, 1.5, -1.5)
     world = load_world(REPO / "worlds" / "simple.world")
     with_box = replace(world, boxes=(*world.boxes, Box("box", 0.0, -1.0, 0.25, 0.0, 0.2, 2.0, 0.5)))
     trip = truth.since(added_at)
