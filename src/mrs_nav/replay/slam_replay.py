@@ -110,6 +110,7 @@ class SlamReplay:
             "scans_skipped": self.scans_out_of_order + self.scans_rejected,
             "loops_closed": self.slam.loops_closed,
             "loops_rejected": self.slam.loops_rejected,
+            "loops_solved": self.slam.loops_solved,
             "free_endpoint_fraction": free_endpoint_fraction(self.slam),
             "ms_per_scan_median": float(np.median(ms)),
             "ms_per_scan_p95": float(np.percentile(ms, 95)),

@@ -122,6 +122,8 @@ class Slam:
         self._trajectory: list[_Tracked] = []
         self.loops_closed = 0
         self.loops_rejected = 0
+        # Closures that moved the graph: the others already agreed with it (the drift went in some other way)
+        self.loops_solved = 0
         self._last_loop_attempt = 0.0
         self._mapped: list[Pose2D] = []  # the pose each node was mapped at
         self._map_to_odom = Pose2D(0.0, 0.0, 0.0)
@@ -282,6 +284,7 @@ class Slam:
                     self._trajectory[-1], node=k, is_node=True, relative=Pose2D(0.0, 0.0, 0.0)
                 )
         self.loops_closed += 1
+        self.loops_solved += closed.poses != poses
         self._last_loop_attempt = current.travelled + LOOP_AFTER_CLOSURE_M - LOOP_EVERY_M
         self.edges.append(edge)
         self.nodes = [dataclasses.replace(r, pose=p) for r, p in zip(self.nodes, closed.poses, strict=True)]

@@ -45,6 +45,7 @@ def test_carmen2bag_then_replay(excerpt, tmp_path, capsys):
         "scans_skipped",
         "loops_closed",
         "loops_rejected",
+        "loops_solved",
         "free_endpoint_fraction",
         "ms_per_scan_median",
         "ms_per_scan_p95",
