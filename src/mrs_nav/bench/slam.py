@@ -249,11 +249,7 @@ def _closures_line(closed: int, solved: int) -> str:
     """How many loop closures moved the pose graph, and what the others mean."""
     line = f"- {solved} of the {closed} loop closures moved the pose graph"
     if solved < closed:
-        line += (
-            f"; the other {closed - solved} agreed with it already: the scan had been matched onto the old place "
-            "(the matcher uses the whole map), so whatever drift the loop had went into the steps before the "
-            "closure instead of being spread over the loop"
-        )
+        line += f"; the graph already satisfied the other {closed - solved} within one standard deviation"
     return line + ".\n"
 
 
@@ -305,13 +301,12 @@ def _odometry_sensitivity(args: argparse.Namespace, relations: list[Relation], s
         f"odometry); {reached} of {len(ates)} runs at or below the {ATE_TARGET_M} m target. The relations error "
         f"stays within {min(trans):.4f}-{max(trans):.4f} m: the relations, all shorter than 2.2 m, do not see "
         "the building's global shape move.\n"
-        f"- Over these runs and the log's own odometry the ATE goes with the share of end points on free cells "
-        f"(correlation {correlation:.2f}; {min(frees):.4f}-{max(frees):.4f} here, {shipped[1]:.4f} with the "
-        "log's own odometry, all below the broken-map line): part of the ATE is a local inconsistency of the map "
-        "that this figure sees (walls mapped twice a few centimetres apart where passes meet). The runs with the "
-        f"most consistent maps (the lowest quarter of that range) still leave {min(consistent):.3f}-"
-        f"{max(consistent):.3f} m: the rest is the global shape, which agrees with the corrected log (another "
-        "SLAM run's output) only as far as these 910 scans fix it.\n"
+        f"- Over these runs and the log's own odometry the correlation of the ATE with the share of end points on "
+        f"free cells is {correlation:.2f} ({min(frees):.4f}-{max(frees):.4f} here, {shipped[1]:.4f} with the "
+        f"log's own odometry; broken-map line {BROKEN_FRACTION}). The runs with the most consistent maps (the "
+        f"lowest quarter of that range) leave {min(consistent):.3f}-{max(consistent):.3f} m: the global shape of "
+        "the building, which agrees with the corrected log (another SLAM run's output) only as far as these 910 "
+        "scans fix it.\n"
     )
     return (
         "### The same log with its odometry scaled (a wheel calibration off; `carmen2bag --odom-scale`)\n\n"

@@ -38,6 +38,7 @@ TOP_CANDIDATES = 8
 PRIOR_WEIGHT = 0.05  # score units (mean likelihood, 0..1) per squared prior standard deviation, halved
 NORMAL_RADIUS = 2  # cells: the neighbourhood whose hits define a surface normal
 POINT_SIGMA_CELLS = 0.5  # assumed standard deviation of a point-to-hit residual, in cells
+FIELD_MAX_DISTANCE = 0.5  # m, truncation of the distance field
 INDEPENDENT_POINTS = 20.0  # neighbouring scan points are correlated; count at most this many as independent
 
 CellArray = npt.NDArray[np.int32]  # grid indices as the distance transform gives them
@@ -150,6 +151,17 @@ def thin_points(points: FloatArray, spacing: float) -> FloatArray:
     mean = np.stack([np.bincount(inverse, points[:, 0]), np.bincount(inverse, points[:, 1])], axis=1) / count[:, None]
     # In beam order (of each cell's first point), as the callers' scans are.
     return np.asarray(mean[np.argsort(first)], dtype=np.float64)
+
+
+def window_field(grid: LogOddsGrid, points: FloatArray, sensor_prior: Pose2D, search_linear: float) -> DistanceField:
+    """The distance field of ``grid`` over the window the scan ``points`` can reach from ``sensor_prior``."""
+    wx, wy = sensor_prior.apply(points).T
+    # The window covers the predicted scan plus the linear search; points that the angular search swings
+    # farther out fall in the padding, where they score nothing, which is what a wrong heading deserves.
+    reach = search_linear + FIELD_MAX_DISTANCE
+    bounds = (float(wx.min()) - reach, float(wy.min()) - reach, float(wx.max()) + reach, float(wy.max()) + reach)
+    pad = math.ceil(reach / grid.resolution) + 2
+    return DistanceField(grid, bounds, FIELD_MAX_DISTANCE, pad)
 
 
 class ScanMatcher:

@@ -110,14 +110,15 @@ def optimise(poses: Sequence[Pose2D], edges: Sequence[Edge], *, max_evaluations:
 def close_loop(poses: Sequence[Pose2D], edges: Sequence[Edge], loop: Edge) -> OptimisedGraph | None:
     """The graph optimised with ``loop`` added, or None when that leaves an edge past :data:`GATE`.
 
-    ``poses`` are expected to satisfy ``edges`` (a graph solved before, extended by edges taken from the poses).
-    When they already satisfy ``loop`` within :data:`AGREES` standard deviations it is not solved again: the
-    solve would move poses by a fraction of the edges' spread, at the cost of a sparse factorisation per step
-    (most closures on a revisit are of this kind, since the scan was matched to a map holding the old place),
-    and the next solve takes the edge in. The poses are returned as they are, with that edge's residual.
+    When the poses already satisfy every edge and ``loop`` within :data:`AGREES` standard deviations it is not
+    solved: the solve would move poses by a fraction of the edges' spread, at the cost of a sparse
+    factorisation per step. The poses are returned as they are, with the largest residual. (Poses that do not
+    satisfy the edges, such as scans pulled onto an old place while the edges hold the robot's own motion, are
+    solved.)
     """
     start = np.array([[p.x, p.y, p.yaw] for p in poses], dtype=np.float64)
-    agreement = float(np.linalg.norm(_Problem.of(start[0], [loop]).residuals(start[1:].ravel())))
+    residuals = _Problem.of(start[0], [*edges, loop]).residuals(start[1:].ravel())
+    agreement = float(np.linalg.norm(residuals.reshape(-1, 3), axis=1).max())
     if agreement <= AGREES:
         return OptimisedGraph(list(poses), agreement)
     result = optimise(poses, [*edges, loop])

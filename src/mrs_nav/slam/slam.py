@@ -8,7 +8,10 @@ Keyframes: memory and work are bounded by the mapped extent, not by time. A proc
 pose graph (:mod:`mrs_nav.slam.posegraph`), keeping its beams, only where no node is already within
 :data:`KEYFRAME_RADIUS_M` and :data:`KEYFRAME_HEADING_RAD` of its matched pose; a scan in a covered place is
 still matched against the map and integrated into it (pose and ``map -> odom`` stay corrected) but not stored.
-Consecutive nodes are linked by the relative pose of their matched poses. With ``keep_trajectory`` (replay,
+Consecutive nodes are linked by the local track's motion between them with loop closure on
+(:mod:`mrs_nav.slam.local_track`: the scans matched against the last few metres only, so that the drift of a
+loop reaches the graph instead of going into the step that met the old place), else by the relative pose of
+their matched poses. With ``keep_trajectory`` (replay,
 evaluation) every processed scan is also remembered, as a pose relative to its nearest node, so the whole
 trajectory follows loop closures; the live stack and node keep only the graph.
 
@@ -19,7 +22,8 @@ submap of the nodes taken near the closest older node that is at least :data:`LO
 node. Once the robot only drives where nodes are, the map it matches against already holds the loop. A match
 that explains at least :data:`LOOP_MIN_INLIERS` of the scan's points is a candidate edge; the graph is optimised
 with it and the edge kept only if every edge then agrees within the gate (else it is rejected as a false
-candidate). When the optimisation moved poses by more than half a cell, the map is rebuilt from the nodes'
+candidate); a closure whose poses already satisfy every edge is kept without a solve. When the optimisation
+moved poses by more than half a cell, the map is rebuilt from the nodes'
 corrected poses, and ``map -> odom`` follows the corrected latest pose.
 
 Frames: ``map`` is the frame of the first processed pose's odometry (``map -> odom`` starts as identity);
@@ -38,12 +42,12 @@ from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.slam.config import MAX_COORDINATE_M, MAX_MAP_CELLS, SlamConfig
 from mrs_nav.slam.grid import LogOddsGrid
-from mrs_nav.slam.matcher import DistanceField, MatchResult, ScanMatcher, thin_points
+from mrs_nav.slam.local_track import LocalTrack
+from mrs_nav.slam.matcher import DistanceField, MatchResult, ScanMatcher, thin_points, window_field
 from mrs_nav.slam.posegraph import Edge, close_loop
 from mrs_nav.slam.scan import LaserScanData, StoredBeams, split_beams
 
 MIN_POINTS = 10  # fewer end points than this: trust odometry, the match would be noise
-FIELD_MAX_DISTANCE = 0.5  # m, truncation of the distance field
 MIN_SPREAD_M = 0.01  # m, floor of the odometry prediction's position spread
 MIN_SPREAD_RAD = math.radians(0.5)  # floor of its heading spread
 LOOP_EVERY_M = 1.0  # m of travel between loop closure attempts
@@ -55,7 +59,8 @@ LOOP_SEARCH_RAD = math.radians(20.0)
 LOOP_MIN_INLIERS = 0.75  # share of scan points within 1.5 cells of the submap's walls
 LOOP_MIN_SPREAD = 0.1  # weakest-direction constraint of a loop match (see _weakest_constraint): no corridors
 LOOP_MIN_POINTS = 40  # thinned points at least: a scan of a bare corridor end proves nothing
-SEQUENTIAL_SIGMA = (0.03, math.radians(1.0))  # m, rad: scan-to-map matched motion between processed scans
+SEQUENTIAL_SIGMA = (0.03, math.radians(1.0))  # m, rad: scan-matched motion between consecutive nodes ...
+SEQUENTIAL_PER_M = 0.5  # ... this far apart; farther apart, it grows with the root of the travel (a random walk)
 LOOP_SIGMA = (0.05, math.radians(1.5))  # m, rad: a verified loop match
 LOOP_AFTER_CLOSURE_M = 3.0  # m of travel after a closure before the next attempt (the map there is fresh)
 REBUILD_AFTER_CELLS = 2.0  # rebuild the map once a pose it was built from is this many cells off
@@ -127,6 +132,9 @@ class Slam:
         self._last_loop_attempt = 0.0
         self._mapped: list[Pose2D] = []  # the pose each node was mapped at
         self._map_to_odom = Pose2D(0.0, 0.0, 0.0)
+        # With loop closure, consecutive nodes are linked by the local track's motion (mrs_nav.slam.local_track)
+        self._local = LocalTrack(c, self.matcher) if c.loop_closure else None
+        self._node_local: list[tuple[Pose2D, float]] = []  # each node's local-track pose and travel
 
     @property
     def processed(self) -> list[ProcessedScan]:
@@ -184,13 +192,20 @@ class Slam:
             )
         match = None
         points = beams.hit_points
+        thinned = thin_points(points, c.delta)
+        spread = self._spread(odom, self.last) if self.last is not None else (MIN_SPREAD_M, MIN_SPREAD_RAD)
         if self.last is not None and points.shape[0] >= MIN_POINTS:
             sensor_prior = predicted.compose(mount)
-            match = self._match(points, sensor_prior, self._spread(odom, self.last))
+            field = window_field(self.grid, thinned, sensor_prior, c.search_linear)
+            match = self.matcher.match(field, thinned, sensor_prior, spread)
             pose = match.pose.compose(mount.inverse())
         else:
             pose = predicted
+
         self.grid.integrate(pose.compose(mount), beams)
+        if self._local is not None:  # after the map took the scan: a refused scan changes nothing
+            enough = points.shape[0] >= MIN_POINTS
+            self._local.update(odom, thinned if enough else thinned[:0], beams, mount=mount, spread=spread)
         self._map_to_odom = pose.compose(odom.inverse())
         last = self.last
         travelled = 0.0 if last is None else last.travelled + math.hypot(pose.x - last.pose.x, pose.y - last.pose.y)
@@ -218,13 +233,30 @@ class Slam:
         best = int(np.argmin(distance))
         return best if math.isfinite(distance[best]) else None
 
-    def _add_node(self, record: ProcessedScan) -> None:
-        """Make ``record`` a graph node linked to the previous node by their matched poses' relative pose."""
+    def _sequential(self, record: ProcessedScan) -> Edge:
+        """The edge from the last node to ``record`` as the next node: the local track's motion between them
+        with loop closure (why: mrs_nav.slam.local_track), else their matched poses' relative pose."""
         k = len(self.nodes)
-        if k:
-            self.edges.append(Edge(k - 1, k, record.pose.relative_to(self.nodes[-1].pose), *SEQUENTIAL_SIGMA))
+        local = self._local
+        if local is None or local.pose is None or not self._node_local:
+            return Edge(k - 1, k, record.pose.relative_to(self.nodes[-1].pose), *SEQUENTIAL_SIGMA)
+        previous, travelled = self._node_local[-1]
+        scale = math.sqrt(max(1.0, (local.travelled - travelled) / SEQUENTIAL_PER_M))
+        sigma_xy, sigma_yaw = SEQUENTIAL_SIGMA
+        return Edge(k - 1, k, local.pose.relative_to(previous), sigma_xy * scale, sigma_yaw * scale)
+
+    def _append_node(self, record: ProcessedScan) -> None:
+        if self._local is not None and self._local.pose is not None:
+            self._node_local.append((self._local.pose, self._local.travelled))
         self.nodes.append(record)
         self._mapped.append(record.pose)
+
+    def _add_node(self, record: ProcessedScan) -> None:
+        """Make ``record`` a graph node linked to the previous node (:meth:`_sequential`)."""
+        k = len(self.nodes)
+        if k:
+            self.edges.append(self._sequential(record))
+        self._append_node(record)
         self._track(record, k)
 
     def _track(self, record: ProcessedScan, node: int) -> None:
@@ -267,7 +299,7 @@ class Slam:
         poses = [r.pose for r in self.nodes] + ([] if is_node else [current.pose])
         edges = self.edges
         if not is_node:
-            edges = [*edges, Edge(k - 1, k, current.pose.relative_to(self.nodes[-1].pose), *SEQUENTIAL_SIGMA)]
+            edges = [*edges, self._sequential(current)]
         found = match.pose.compose(current.laser_pose.inverse())
         edge = Edge(j, k, found.relative_to(nearest.pose), *LOOP_SIGMA)
         closed = close_loop(poses, edges, edge)
@@ -277,8 +309,7 @@ class Slam:
         if not is_node:
             # The scan that closes the loop becomes a node: it is the loop edge's end.
             self.edges.append(edges[-1])
-            self.nodes.append(current)
-            self._mapped.append(current.pose)
+            self._append_node(current)
             if self.keep_trajectory:
                 self._trajectory[-1] = dataclasses.replace(
                     self._trajectory[-1], node=k, is_node=True, relative=Pose2D(0.0, 0.0, 0.0)
@@ -317,7 +348,7 @@ class Slam:
         for record in submap:
             if record.beams is not None:
                 grid.integrate(record.pose.compose(record.laser_pose), record.beams.split())
-        field = _field(grid, points, prior, LOOP_SEARCH_M)
+        field = window_field(grid, points, prior, LOOP_SEARCH_M)
         if field.empty:
             return None
         matcher = ScanMatcher(c.sigma, LOOP_SEARCH_M, LOOP_SEARCH_RAD)
@@ -341,11 +372,6 @@ class Slam:
             MIN_SPREAD_RAD + c.str * travelled + c.stt * turned,
         )
 
-    def _match(self, points: FloatArray, sensor_prior: Pose2D, spread: tuple[float, float]) -> MatchResult:
-        thinned = thin_points(points, self.config.delta)
-        field = _field(self.grid, thinned, sensor_prior, self.config.search_linear)
-        return self.matcher.match(field, thinned, sensor_prior, spread)
-
 
 def _weakest_constraint(field: DistanceField, points: FloatArray, pose: Pose2D) -> float:
     """How well the surfaces under the matched ``points`` pin the pose in its weakest direction: the smallest
@@ -357,14 +383,3 @@ def _weakest_constraint(field: DistanceField, points: FloatArray, pose: Pose2D) 
         return 0.0
     n = np.stack([np.cos(normal), np.sin(normal)], axis=1)
     return float(np.linalg.eigvalsh(n.T @ n / normal.size)[0])
-
-
-def _field(grid: LogOddsGrid, points: FloatArray, sensor_prior: Pose2D, search_linear: float) -> DistanceField:
-    """The distance field of ``grid`` over the window the scan ``points`` can reach from ``sensor_prior``."""
-    wx, wy = sensor_prior.apply(points).T
-    # The window covers the predicted scan plus the linear search; points that the angular search swings
-    # farther out fall in the padding, where they score nothing, which is what a wrong heading deserves.
-    reach = search_linear + FIELD_MAX_DISTANCE
-    bounds = (float(wx.min()) - reach, float(wy.min()) - reach, float(wx.max()) + reach, float(wy.max()) + reach)
-    pad = math.ceil(reach / grid.resolution) + 2
-    return DistanceField(grid, bounds, FIELD_MAX_DISTANCE, pad)
