@@ -105,7 +105,7 @@ class RrtNavigationConfig:
     controller_frequency: float = 10.0
     pose_timeout_s: float = 1.0
     correction_timeout_s: float = 5.0
-    correction_freshness_s: float = 0.3
+    correction_freshness_s: float = 0.15
     scan_timeout_s: float = 0.4
     # s (sim) to wait for tf at a scan's stamp: the odometry of that instant is on its way with the scan
     transform_tolerance_s: float = 0.1
@@ -176,7 +176,7 @@ class RrtNavigationConfig:
             controller_frequency=private_param("controller_frequency", 10.0),
             pose_timeout_s=private_param("pose_timeout", 1.0),
             correction_timeout_s=private_param("correction_timeout", 5.0),
-            correction_freshness_s=private_param("correction_freshness", 0.3),
+            correction_freshness_s=private_param("correction_freshness", 0.15),
             scan_timeout_s=private_param("scan_timeout", 0.4),
             transform_tolerance_s=private_param("transform_tolerance", 0.1),
             map_frame=private_param("map_frame", "map"),
