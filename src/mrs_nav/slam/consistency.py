@@ -10,15 +10,17 @@ than a cell are not. It is a fraction of a percent in a good map (moving people,
 broken one. :data:`BROKEN_FRACTION` is the line ``mrs-nav bench slam`` fails at.
 
 :func:`revisit_spread` is a finer figure for comparing trajectories of the same scans (this SLAM's against a
-reference's): how closely end points of scans taken far apart in time agree.
+reference's): how closely end points of scans taken far apart in time agree; :func:`revisit_spread_by_distance`
+splits it by how far apart the scans were taken, which is where a global deformation of one trajectory shows.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
+import numpy.typing as npt
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
@@ -32,6 +34,8 @@ REVISIT_GAP = 60  # scans apart: what a scan's own neighbours in time see is not
 REVISIT_REACH_M = 0.3  # m: farther apart, two end points are not the same wall
 REVISIT_CELL_M = 0.05  # m: one end point per cell of this size per scan
 REVISIT_NEIGHBOURS = 32  # nearest end points examined per end point
+REVISIT_BAND_NEIGHBOURS = 128  # the same when only scans taken some distance apart qualify
+REVISIT_CHUNK = 10_000  # end points per neighbour query (memory: a few chunk x neighbours x 16 bytes)
 
 
 def free_endpoint_fraction(slam: Slam) -> float:
@@ -67,20 +71,85 @@ def revisit_spread(sensor_poses: Sequence[Pose2D], points: Sequence[FloatArray],
     raises it). End points are thinned to one per :data:`REVISIT_CELL_M` cell per scan, which bounds the
     memory of the neighbour search.
     """
+    xy, scan = _placed_end_points(sensor_poses, points)
+    nearest = _nearest_qualifying(xy, scan, [lambda mine, other: np.abs(other - mine) >= min_gap], REVISIT_NEIGHBOURS)
+    found = nearest[:, 0][np.isfinite(nearest[:, 0])]
+    return float(np.median(found)) if found.size else math.nan
+
+
+def revisit_spread_by_distance(
+    sensor_poses: Sequence[Pose2D],
+    points: Sequence[FloatArray],
+    positions: FloatArray,
+    bands: Sequence[tuple[float, float]],
+    min_gap: int = REVISIT_GAP,
+) -> list[tuple[float, int]]:
+    """:func:`revisit_spread` split by how far apart (m) the two scans were taken: per band ``(low, high)``, the
+    median distance from each end point to the nearest end point of a scan at least ``min_gap`` scans away whose
+    position is ``low`` <= distance < ``high`` from its own, and how many end points had one.
+
+    ``positions`` (N x 2) say where each scan was taken for choosing the pairs, so that two trajectories of the
+    same scans are scored on the same pairs (give both the same positions). A global deformation of a trajectory
+    (a building stretched by 0.5 % between two maps of it) leaves scans taken close together agreeing and puts
+    those taken 10 m apart 5 cm off: it shows in the far bands only. The nearest qualifying end point is sought
+    among the :data:`REVISIT_BAND_NEIGHBOURS` nearest of any scan.
+    """
+    where = np.asarray(positions, dtype=np.float64).reshape(-1, 2)
+    if where.shape[0] != len(points):
+        raise InvalidInputError(f"revisit spread: {where.shape[0]} positions for {len(points)} scans")
+    xy, scan = _placed_end_points(sensor_poses, points)
+
+    def band(low: float, high: float) -> Qualifier:
+        def qualifies(mine: npt.NDArray[np.int64], other: npt.NDArray[np.int64]) -> npt.NDArray[np.bool_]:
+            apart = np.hypot(*(where[other] - where[mine]).transpose(2, 0, 1))
+            qualified: npt.NDArray[np.bool_] = (np.abs(other - mine) >= min_gap) & (apart >= low) & (apart < high)
+            return qualified
+
+        return qualifies
+
+    nearest = _nearest_qualifying(xy, scan, [band(low, high) for low, high in bands], REVISIT_BAND_NEIGHBOURS)
+    out = []
+    for column in nearest.T:
+        found = column[np.isfinite(column)]
+        out.append((float(np.median(found)) if found.size else math.nan, int(found.size)))
+    return out
+
+
+Qualifier = Callable[[npt.NDArray[np.int64], npt.NDArray[np.int64]], npt.NDArray[np.bool_]]
+
+
+def _placed_end_points(
+    sensor_poses: Sequence[Pose2D], points: Sequence[FloatArray]
+) -> tuple[FloatArray, npt.NDArray[np.int64]]:
+    """Every scan's end points, thinned to one per :data:`REVISIT_CELL_M` cell and placed by its pose, and the
+    index of the scan each came from."""
     if len(sensor_poses) != len(points):
         raise InvalidInputError(f"revisit spread: {len(sensor_poses)} poses for {len(points)} scans")
-    world, owner = [], []
+    world, owner = [np.zeros((0, 2))], [np.zeros(0, dtype=np.int64)]
     for k, (pose, local) in enumerate(zip(sensor_poses, points, strict=True)):
         thinned = thin_points(np.asarray(local, dtype=np.float64).reshape(-1, 2), REVISIT_CELL_M)
         world.append(pose.apply(thinned))
-        owner.append(np.full(thinned.shape[0], k))
-    xy, scan = np.concatenate(world), np.concatenate(owner)
+        owner.append(np.full(thinned.shape[0], k, dtype=np.int64))
+    return np.concatenate(world), np.concatenate(owner)
+
+
+def _nearest_qualifying(
+    xy: FloatArray, scan: npt.NDArray[np.int64], qualifiers: Sequence[Qualifier], neighbours: int
+) -> FloatArray:
+    """Per end point (rows) and qualifier (columns): the distance to the nearest of its ``neighbours`` nearest
+    end points within :data:`REVISIT_REACH_M` whose scan qualifies (``qualifier(own scans, their scans)``), inf
+    where none does. Queried in chunks: a whole log's neighbour lists at once would take gigabytes."""
+    out = np.full((xy.shape[0], len(qualifiers)), np.inf)
     if xy.shape[0] == 0:
-        return math.nan
-    distance, index = cKDTree(xy).query(xy, k=REVISIT_NEIGHBOURS, distance_upper_bound=REVISIT_REACH_M)
-    found = np.isfinite(distance)
-    # Missing neighbours come back with index == number of points: clamp before looking up their scan.
-    far = found & (np.abs(scan[np.minimum(index, xy.shape[0] - 1)] - scan[:, None]) >= min_gap)
-    nearest = np.where(far, distance, np.inf).min(axis=1)
-    nearest = nearest[np.isfinite(nearest)]
-    return float(np.median(nearest)) if nearest.size else math.nan
+        return out
+    tree = cKDTree(xy)
+    for start in range(0, xy.shape[0], REVISIT_CHUNK):
+        stop = min(start + REVISIT_CHUNK, xy.shape[0])
+        distance, index = tree.query(xy[start:stop], k=neighbours, distance_upper_bound=REVISIT_REACH_M)
+        # Missing neighbours come back with index == number of points: clamp before looking up their scan.
+        other = scan[np.minimum(index, xy.shape[0] - 1)]
+        mine = np.broadcast_to(scan[start:stop, None], other.shape)
+        found = np.isfinite(distance)
+        for column, qualifies in enumerate(qualifiers):
+            out[start:stop, column] = np.where(found & qualifies(mine, other), distance, np.inf).min(axis=1)
+    return out

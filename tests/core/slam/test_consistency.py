@@ -8,7 +8,7 @@ import pytest
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
-from mrs_nav.slam.consistency import REVISIT_GAP, revisit_spread
+from mrs_nav.slam.consistency import REVISIT_GAP, revisit_spread, revisit_spread_by_distance
 
 # A wall at x = 2 m in the world, sampled at the centres of 5 cm cells (thinning keeps them as they are).
 WALL = np.stack([np.full(40, 2.025), -0.975 + 0.05 * np.arange(40)], axis=1)
@@ -38,3 +38,28 @@ def test_scans_close_in_time_are_no_revisit_and_bad_input_is_named():
     assert math.isnan(revisit_spread(_poses(REVISIT_GAP - 1, SECOND), _scans(REVISIT_GAP - 1)))
     with pytest.raises(InvalidInputError, match="2 poses for 1 scans"):
         revisit_spread([SECOND, SECOND], [WALL])
+
+
+def test_a_stretched_building_shows_between_scans_taken_far_apart_only():
+    # A wall across the x axis at x = 12 m, seen from x = 0, 1 and 10 m (scans REVISIT_GAP apart in time).
+    far_wall = np.stack([np.full(40, 12.025), -0.975 + 0.05 * np.arange(40)], axis=1)
+    taken = np.array([0.0, 1.0, 10.0])
+    scans = [np.zeros((0, 2))] * (2 * REVISIT_GAP + 1)
+    positions = np.zeros((len(scans), 2))
+    for k, x in enumerate(taken):
+        scans[k * REVISIT_GAP] = far_wall - np.array([x, 0.0])
+        positions[k * REVISIT_GAP, 0] = x
+    bands = [(0.0, 2.0), (2.0, 20.0)]
+
+    def placed(stretch: float) -> list[Pose2D]:
+        return [Pose2D(stretch * x, 0.0, 0.0) for x in positions[:, 0]]
+
+    (near, near_points), (far, far_points) = revisit_spread_by_distance(placed(1.0), scans, positions, bands)
+    assert (near, far) == (pytest.approx(0.0, abs=1e-9), pytest.approx(0.0, abs=1e-9))
+    assert (near_points, far_points) == (80, 120)  # x = 0 and 1 m see each other; 10 m sees both, both see it
+    # Stretched by 0.5 % along x: 5 mm off between the scans 1 m apart, 4.5-5 cm between those 9-10 m apart.
+    (near, _), (far, _) = revisit_spread_by_distance(placed(1.005), scans, positions, bands)
+    assert near == pytest.approx(0.005, abs=1e-9)
+    assert 0.045 - 1e-9 <= far <= 0.05 + 1e-9
+    with pytest.raises(InvalidInputError, match="2 positions for"):
+        revisit_spread_by_distance(placed(1.0), scans, positions[:2], bands)
