@@ -145,17 +145,17 @@ def _intel(args: argparse.Namespace, relations: list[Relation]) -> tuple[str, tu
     scored = result.relation_errors(relations)
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     free = summary["free_endpoint_fraction"]
-    local_ate = windowed_ate(*result.truth_pairs(), window=ATE_WINDOW)
-    affine = affine_fit(*result.truth_pairs())
+    paired, reference = result.truth_pairs()
+    local_ate = windowed_ate(paired, reference, window=ATE_WINDOW)
+    affine = affine_fit(paired, reference)
     # After the peak RSS is read: the neighbour search is an analysis of the result, not part of the SLAM.
     points = _end_points(args.log)
-    if len(points) != len(result.estimate) or len(result.truth_pairs()[1]) != len(points):
+    if len(points) != len(result.estimate) or len(reference) != len(points):
         raise InvalidInputError(
             f"bench slam: {len(points)} scans in {args.log}, {len(result.estimate)} processed: every scan must be"
         )
     mine = [r.pose.compose(r.laser_pose) for r in result.slam.processed]
-    # The log's poses are the laser's (the conversion mounts the laser at the base).
-    reference = result.truth_pairs()[1]
+    # The log's poses (reference) are the laser's: the conversion mounts the laser at the base.
     spread, spread_reference = revisit_spread(mine, points), revisit_spread(reference, points)
     by_distance = _spread_by_distance(mine, reference, points)
     rows: list[list[object]] = [

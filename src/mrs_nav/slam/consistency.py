@@ -36,6 +36,8 @@ REVISIT_CELL_M = 0.05  # m: one end point per cell of this size per scan
 REVISIT_NEIGHBOURS = 32  # nearest end points examined per end point
 REVISIT_BAND_NEIGHBOURS = 128  # the same when only scans taken some distance apart qualify
 REVISIT_CHUNK = 10_000  # end points per neighbour query (memory: a few chunk x neighbours x 16 bytes)
+# Whether end points of scans ``mine`` may pair with end points of scans ``other`` (arrays of scan indices)
+Qualifier = Callable[[npt.NDArray[np.int64], npt.NDArray[np.int64]], npt.NDArray[np.bool_]]
 
 
 def free_endpoint_fraction(slam: Slam) -> float:
@@ -113,9 +115,6 @@ def revisit_spread_by_distance(
         found = column[np.isfinite(column)]
         out.append((float(np.median(found)) if found.size else math.nan, int(found.size)))
     return out
-
-
-Qualifier = Callable[[npt.NDArray[np.int64], npt.NDArray[np.int64]], npt.NDArray[np.bool_]]
 
 
 def _placed_end_points(

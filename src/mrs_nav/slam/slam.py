@@ -219,7 +219,7 @@ class Slam:
         growing = bool(self.nodes) and travelled - self.nodes[-1].travelled <= LOOP_GROWING_M
         if c.loop_closure and growing and travelled - self._last_loop_attempt >= LOOP_EVERY_M:
             self._last_loop_attempt = travelled
-            self._try_loop(record, points)
+            self._try_loop(record, thinned)
         return self.last
 
     def _nearest_node(self, pose: Pose2D) -> int | None:
@@ -271,9 +271,9 @@ class Slam:
             )
         )
 
-    def _try_loop(self, current: ProcessedScan, points: FloatArray) -> None:
-        """Look for a loop closure of the latest scan (module doc); optimise and rebuild when one holds."""
-        thinned = thin_points(points, self.config.delta)
+    def _try_loop(self, current: ProcessedScan, thinned: FloatArray) -> None:
+        """Look for a loop closure of the latest scan (``thinned``: its end points as the matcher takes them,
+        module doc); optimise and rebuild when one holds."""
         if thinned.shape[0] < LOOP_MIN_POINTS:
             return
         old = [r for r in self.nodes if current.travelled - r.travelled >= LOOP_MIN_TRAVEL_M]
