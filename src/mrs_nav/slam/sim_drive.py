@@ -104,6 +104,7 @@ def drive_with_slam(
             if done is not None:
                 slam_ms.append(1000.0 * (time.process_time() - t0))
                 truth.append(sim.ground_truth())
+    slam.finish()  # the map from the corrected poses, as after a log's last scan
     estimate = [p.pose for p in slam.processed]
     errors = trajectory_errors(estimate, truth)
     # SLAM fixes its map frame only up to a rigid motion (its first headings come from odometry): the map is
