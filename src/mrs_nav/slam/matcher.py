@@ -12,11 +12,9 @@ the scan can reach, and into a likelihood field ``L = exp(-D^2 / (2 sigma^2))``.
    still wins.
 2. Fine search: the best coarse blocks are searched cell by cell with a finer angular step.
 3. Refinement: point-to-line ICP (Gauss-Newton, Huber-weighted) where each scan point is paired with the mean
-   end point of its nearest occupied cell (the distance field's nearest cell to the point's cell, or the
-   neighbour of it whose mean end point is nearer to the point: the field's choice among equally near cells is
-   a fixed rule, and pairing by it biased every match the same way) and the surface normal there (principal
-   axes of the neighbouring mean hits), for sub-cell, sub-degree accuracy without sticking to the cell grid
-   along walls; pairs farther than 4 cells apart are ignored. The same
+   end point of its nearest occupied cell (found through the distance field's nearest-cell indices) and the
+   surface normal there (principal axes of the neighbouring mean hits), for sub-cell, sub-degree accuracy
+   without sticking to the cell grid along walls; pairs farther than 4 cells apart are ignored. The same
    odometry prior keeps directions the scan does not constrain (along a corridor) where odometry put them.
 """
 
@@ -220,7 +218,7 @@ class ScanMatcher:
         _, dyaw, dx, dy = best
         start = Pose2D(prior.x + dx * res, prior.y + dy * res, wrap_angle(prior.yaw + dyaw))
         pose = self.refine(field, points, start, prior=prior, spread=spread)
-        return self._evaluate(field, likelihood, points, pose)
+        return self.evaluate(field, points, pose)
 
     def _scores(
         self,
@@ -260,7 +258,8 @@ class ScanMatcher:
         x, y, yaw = _refine(points, _floats(start), _floats(prior), prior_info, iterations, field.kernel_args())
         return Pose2D(x, y, wrap_angle(yaw))
 
-    def _evaluate(self, field: DistanceField, likelihood: FloatArray, points: FloatArray, pose: Pose2D) -> MatchResult:
+    def evaluate(self, field: DistanceField, points: FloatArray, pose: Pose2D) -> MatchResult:
+        """How well ``points`` (laser frame) fit ``field`` at the laser pose ``pose``, without moving it."""
         wx, wy = pose.apply(points).T
         d, _, _ = field.interpolate(wx, wy)
         score = float(np.mean(np.exp(-(d**2) / (2.0 * self.sigma**2))))
@@ -316,29 +315,6 @@ def _normal_at(grid: GridArrays, iy: int, ix: int) -> float:
     return 0.5 * math.atan2(2.0 * sxy, sxx - syy) + 0.5 * math.pi
 
 
-@numba.njit("UniTuple(int64, 2)(" + GRID_ARRAYS_TYPE + ", int64, int64, float64, float64)", cache=True)  # type: ignore[misc]
-def _nearest_hit_around(grid: GridArrays, iy: int, ix: int, x: float, y: float) -> tuple[int, int]:
-    """Of the occupied cell ``(iy, ix)`` and its occupied neighbours, the one whose mean hit is nearest to the
-    point ``(x, y)``.
-
-    Why: the distance field names the occupied cell nearest to the *centre* of the point's cell, and where
-    several are equally near it names one by a fixed rule, the same way everywhere; pairing points by that rule
-    pulls every match the same way. Which neighbour is nearest to the point itself follows the point."""
-    logodds, _, hit_count, _, _, _ = grid
-    height, width = logodds.shape
-    best_iy, best_ix = iy, ix
-    mx, my = _mean_hit(grid, iy, ix)
-    best = (mx - x) ** 2 + (my - y) ** 2
-    for gy in range(max(iy - 1, 0), min(iy + 1, height - 1) + 1):
-        for gx in range(max(ix - 1, 0), min(ix + 1, width - 1) + 1):
-            if logodds[gy, gx] > 0.0 and hit_count[gy, gx] > 0.0:
-                mx, my = _mean_hit(grid, gy, gx)
-                d = (mx - x) ** 2 + (my - y) ** 2
-                if d < best:
-                    best, best_iy, best_ix = d, gy, gx
-    return best_iy, best_ix
-
-
 @numba.njit("UniTuple(float64, 3)(float64, float64, " + _SURFACE_ARGS + ")", cache=True)  # type: ignore[misc]
 def _surface(
     x: float,
@@ -354,7 +330,6 @@ def _surface(
     niy, nix = near_iy[iy, ix], near_ix[iy, ix]
     if niy < 0:
         return np.nan, np.nan, np.nan
-    niy, nix = _nearest_hit_around(grid, niy, nix, x, y)
     normal = _normal_at(grid, niy, nix)
     if not math.isfinite(normal):
         return np.nan, np.nan, np.nan
@@ -498,7 +473,8 @@ def _truncated_field(
     ``cap``). Why not a Euclidean distance transform: only the truncated distances matter, walls are a few per
     cent of a window's cells, and the transform's exact distances across the empty rest cost six times as much
     on the Intel log's windows, for the same capped distances. Of equally near cells the first in row order is
-    kept.
+    kept; scipy's transform keeps another in about 1 % of cells, and the last in row order gives the Intel
+    replay's ATE 0.073 m against 0.070 m: the choice matters no more than any small perturbation does.
     """
     height, width = occupied.shape
     shape = (height + 2 * pad, width + 2 * pad)

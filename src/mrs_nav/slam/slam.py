@@ -20,11 +20,12 @@ new node, or the last node is at most :data:`LOOP_GROWING_M` of travel back), th
 submap of the nodes taken near the closest older node that is at least :data:`LOOP_MIN_TRAVEL_M` of travel back
 (within :data:`LOOP_RADIUS_M`), with a wide search and no odometry prior; a scan that closes a loop becomes a
 node. Once the robot only drives where nodes are, the map it matches against already holds the loop. A match
-that explains at least :data:`LOOP_MIN_INLIERS` of the scan's points is a candidate edge; the graph is optimised
-with it and the edge kept only if every edge then agrees within the gate (else it is rejected as a false
-candidate); a closure whose poses already satisfy every edge is kept without a solve. When the optimisation
-moved poses by more than half a cell, the map is rebuilt from the nodes'
-corrected poses, and ``map -> odom`` follows the corrected latest pose.
+that explains at least :data:`LOOP_MIN_INLIERS` of the scan's points, pins the pose in every direction, and fits
+clearly better than the scan fits where the graph puts it (:func:`ambiguous_loop_match`) is a candidate edge; the
+graph is optimised with it and the edge kept only if every edge then agrees within the gate (else it is rejected
+as a false candidate); a closure whose poses already satisfy every edge is kept without a solve. When the
+optimisation moved a node by more than :data:`REBUILD_AFTER_CELLS` cells from where the map has it, the map is
+rebuilt from the nodes' corrected poses; ``map -> odom`` follows the corrected latest pose.
 
 Frames: ``map`` is the frame of the first processed pose's odometry (``map -> odom`` starts as identity);
 ``odom`` is the odometry frame; poses of the robot are of its base frame; ``laser_pose`` is base -> laser.
@@ -58,6 +59,10 @@ LOOP_SEARCH_M = 1.0  # m, half-width of the loop match's search (the drift it ca
 LOOP_SEARCH_RAD = math.radians(20.0)
 LOOP_MIN_INLIERS = 0.75  # share of scan points within 1.5 cells of the submap's walls
 LOOP_MIN_SPREAD = 0.1  # weakest-direction constraint of a loop match (see _weakest_constraint): no corridors
+# A loop match more than LOOP_DISTINCT_M from where refining the scan in place (at the graph's estimate) ends
+# must fit clearly better than it fits there: its score times LOOP_AMBIGUITY must exceed the score in place.
+LOOP_DISTINCT_M = 0.1
+LOOP_AMBIGUITY = 0.9
 LOOP_MIN_POINTS = 40  # thinned points at least: a scan of a bare corridor end proves nothing
 SEQUENTIAL_SIGMA = (0.03, math.radians(1.0))  # m, rad: scan-matched motion between consecutive nodes ...
 SEQUENTIAL_PER_M = 0.5  # ... this far apart; farther apart, it grows with the root of the travel (a random walk)
@@ -279,8 +284,8 @@ class Slam:
         old = [r for r in self.nodes if current.travelled - r.travelled >= LOOP_MIN_TRAVEL_M]
         if not old:
             return
-        nearest = min(old, key=lambda r: math.hypot(r.pose.x - current.pose.x, r.pose.y - current.pose.y))
-        if math.hypot(nearest.pose.x - current.pose.x, nearest.pose.y - current.pose.y) > LOOP_RADIUS_M:
+        nearest = min(old, key=lambda r: _apart(r.pose, current.pose))
+        if _apart(nearest.pose, current.pose) > LOOP_RADIUS_M:
             return
         submap = [r for r in old if abs(r.travelled - nearest.travelled) <= LOOP_SUBMAP_M]
         sensor_prior = current.pose.compose(current.laser_pose)
@@ -291,6 +296,7 @@ class Slam:
         if (
             match.inlier_fraction < LOOP_MIN_INLIERS
             or _weakest_constraint(field, thinned, match.pose) < LOOP_MIN_SPREAD
+            or ambiguous_loop_match(field, thinned, match, sensor_prior, self.config.sigma)
         ):
             return
         j = self.nodes.index(nearest)
@@ -328,7 +334,7 @@ class Slam:
     def map_lag(self) -> float:
         """How far (m) the poses the map was built from are, at most, from the current estimates."""
         return max(
-            (math.hypot(m.x - r.pose.x, m.y - r.pose.y) for m, r in zip(self._mapped, self.nodes, strict=True)),
+            (_apart(m, r.pose) for m, r in zip(self._mapped, self.nodes, strict=True)),
             default=0.0,
         )
 
@@ -371,6 +377,34 @@ class Slam:
             MIN_SPREAD_M + c.srr * travelled + c.srt * turned,
             MIN_SPREAD_RAD + c.str * travelled + c.stt * turned,
         )
+
+
+def ambiguous_loop_match(
+    field: DistanceField, points: FloatArray, match: MatchResult, prior: Pose2D, sigma: float
+) -> bool:
+    """Whether the scan ``points`` (laser frame) fits the loop submap's ``field`` at another place almost as well
+    as at the loop ``match``: where refining from ``prior`` (where the graph puts the laser) ends, when that is
+    not where the match is. ``sigma``: the matcher's likelihood width (m).
+
+    Why: in a corridor with regular doors, or a hall seen through one opening, a scan fits two places about
+    equally well, and the wide loop search returns whichever scored higher by a hair. The weakest-direction
+    check passes when the aliasing is along a direction the scan still constrains a little. A closure is only
+    worth moving the graph for when the scans prefer the new place clearly (:data:`LOOP_AMBIGUITY`); when both
+    fit, the graph's own estimate, which every earlier edge supports, stands. A drifted graph whose local
+    refinement slides onto the match is not ambiguous: both found the same place.
+    """
+    if _apart(match.pose, prior) <= LOOP_DISTINCT_M:
+        return False
+    matcher = ScanMatcher(sigma, LOOP_SEARCH_M, LOOP_SEARCH_RAD)
+    local = matcher.refine(field, points, prior, prior=prior, spread=(LOOP_SEARCH_M, LOOP_SEARCH_RAD))
+    if _apart(match.pose, local) <= LOOP_DISTINCT_M:
+        return False
+    return LOOP_AMBIGUITY * match.score <= matcher.evaluate(field, points, local).score
+
+
+def _apart(a: Pose2D, b: Pose2D) -> float:
+    """Distance (m) between two poses' positions."""
+    return math.hypot(a.x - b.x, a.y - b.y)
 
 
 def _weakest_constraint(field: DistanceField, points: FloatArray, pose: Pose2D) -> float:

@@ -72,19 +72,7 @@ def reference_nearest_surface(field: DistanceField, x: np.ndarray, y: np.ndarray
     niy, nix = field.near_iy[iy, ix], field.near_ix[iy, ix]
     inside = niy >= 0
     niy, nix = np.maximum(niy, 0), np.maximum(nix, 0)
-    # Of the field's nearest cell and its occupied 8 neighbours, the one whose mean hit is nearest to the point;
-    # the nearest cell itself on a tie (it is examined first, and only a strictly nearer neighbour replaces it).
-    steps = np.array([(0, 0)] + [(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if (dy, dx) != (0, 0)])
-    cy = np.clip(niy[:, None] + steps[None, :, 0], 0, grid.height - 1)
-    cx = np.clip(nix[:, None] + steps[None, :, 1], 0, grid.width - 1)
-    candidate = (grid.logodds[cy, cx] > 0.0) & (grid.hit_count[cy, cx] > 0)
-    candidate[:, 0] = True
-    mx, my = grid.mean_hits(cy, cx)
-    away = np.where(candidate, (mx - x[:, None]) ** 2 + (my - y[:, None]) ** 2, np.inf)
-    pick = np.argmin(away, axis=1)  # the first of equal minima: the nearest cell before its neighbours
-    rows = np.arange(x.size)
-    niy, nix = cy[rows, pick], cx[rows, pick]
-    hx, hy = mx[rows, pick], my[rows, pick]
+    hx, hy = grid.mean_hits(niy, nix)
     offsets = np.arange(-NORMAL_RADIUS, NORMAL_RADIUS + 1)
     oy, ox = (a.ravel() for a in np.meshgrid(offsets, offsets, indexing="ij"))
     gy = np.clip(niy[:, None] + oy[None, :], 0, grid.height - 1)

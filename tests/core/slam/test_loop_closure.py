@@ -1,6 +1,7 @@
 """Loop closure in the SLAM core on a seeded drive around a 48 m ring corridor (two 18 m featureless corridors):
 closures are found, every accepted loop edge is right, corridor look-alikes are not accepted, and the map stays
-consistent (the free-endpoint figure)."""
+consistent (the free-endpoint figure). A loop match on a place that looks like where the graph already puts the
+scan is ambiguous; one that fits clearly better than the graph's estimate is not."""
 
 import itertools
 import math
@@ -10,7 +11,11 @@ import numpy as np
 from mrs_nav.geometry import Pose2D
 from mrs_nav.slam import Slam, SlamConfig
 from mrs_nav.slam.consistency import BROKEN_FRACTION, free_endpoint_fraction
-from tests.core.slam.synthetic import cast
+from mrs_nav.slam.grid import LogOddsGrid
+from mrs_nav.slam.matcher import DistanceField, ScanMatcher, thin_points, window_field
+from mrs_nav.slam.scan import BeamSplit, split_beams
+from mrs_nav.slam.slam import LOOP_SEARCH_M, LOOP_SEARCH_RAD, ambiguous_loop_match
+from tests.core.slam.synthetic import ROOM, cast
 
 
 def rect(x0, y0, x1, y1):
@@ -79,3 +84,49 @@ def test_loops_close_with_right_edges_only():
     first_loop = loops[0]
     end = slam.nodes[first_loop.j].pose
     assert math.hypot(end.x - truth_of[first_loop.j].x, end.y - truth_of[first_loop.j].y) < 0.03
+
+
+# A 2 m wide corridor with a door stub every metre on both walls: seen from anywhere along it, the scan is the
+# same one metre on. A room with a wall stub and a pillar (synthetic.ROOM), where no pose looks like another.
+DOORS = np.array(
+    [[-12, -1, 12, -1], [-12, 1, 12, 1]]
+    + [[x, -1, x, -0.7] for x in range(-12, 13)]
+    + [[x, 1, x, 0.7] for x in range(-12, 13)],
+    dtype=np.float64,
+)
+
+
+def submap_and_scan(walls: np.ndarray, mapped_from: list[Pose2D], laser: Pose2D) -> tuple[DistanceField, np.ndarray]:
+    """The loop submap's distance field of ``walls`` scanned from ``mapped_from``, and the thinned end points of
+    a scan from ``laser``, as the loop search takes them."""
+    config = SlamConfig()
+
+    def beams(pose: Pose2D) -> BeamSplit:
+        scan = cast(pose, walls=walls)
+        return split_beams(scan, config.usable_range(scan.range_max))
+
+    grid = LogOddsGrid(config.delta, (-13.0, -6.0, 13.0, 6.0))
+    for pose in mapped_from:
+        grid.integrate(pose, beams(pose))
+    points = thin_points(beams(laser).hit_points, config.delta)
+    return window_field(grid, points, laser, LOOP_SEARCH_M), points
+
+
+def test_a_loop_match_on_a_look_alike_place_is_ambiguous():
+    here = Pose2D(0.0, 0.0, 0.0)
+    field, points = submap_and_scan(DOORS, [Pose2D(x, 0.0, 0.0) for x in np.arange(-6.0, 6.5, 0.5)], here)
+    matcher = ScanMatcher(SlamConfig().sigma, LOOP_SEARCH_M, LOOP_SEARCH_RAD)
+    twin = matcher.evaluate(field, points, Pose2D(1.0, 0.0, 0.0))  # one door on: the scan fits as well there
+    assert twin.inlier_fraction > 0.9
+    assert ambiguous_loop_match(field, points, twin, here, SlamConfig().sigma)
+
+
+def test_a_loop_match_that_fits_clearly_better_than_the_graph_is_not_ambiguous():
+    truth = Pose2D(-1.0, 0.5, 0.2)
+    field, points = submap_and_scan(ROOM, [Pose2D(-3.0, 0.0, 0.0), Pose2D(3.0, 0.0, 0.0), truth], truth)
+    matcher = ScanMatcher(SlamConfig().sigma, LOOP_SEARCH_M, LOOP_SEARCH_RAD)
+    match = matcher.evaluate(field, points, truth)
+    # The graph 0.6 m off (the drift a loop closure corrects): the scan fits badly there.
+    assert not ambiguous_loop_match(field, points, match, Pose2D(-0.4, 0.6, 0.25), SlamConfig().sigma)
+    # The graph 0.15 m off: refining from there slides onto the match, the same place.
+    assert not ambiguous_loop_match(field, points, match, Pose2D(-0.88, 0.42, 0.22), SlamConfig().sigma)
