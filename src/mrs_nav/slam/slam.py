@@ -128,6 +128,7 @@ class Slam:
             max_cells=MAX_MAP_CELLS,
         )
         self.matcher = ScanMatcher(c.sigma, c.search_linear, c.search_angular)
+        self.loop_matcher = ScanMatcher(c.sigma, LOOP_SEARCH_M, LOOP_SEARCH_RAD)  # wide search, no odometry prior
         self.nodes: list[ProcessedScan] = []  # the pose graph's nodes (keyframes), with their beams
         self.edges: list[Edge] = []
         self.last: ProcessedScan | None = None  # the latest processed scan
@@ -299,7 +300,7 @@ class Slam:
         if (
             match.inlier_fraction < LOOP_MIN_INLIERS
             or _weakest_constraint(field, thinned, match.pose) < LOOP_MIN_SPREAD
-            or ambiguous_loop_match(field, thinned, match, sensor_prior, self.config.sigma)
+            or ambiguous_loop_match(self.loop_matcher, field, thinned, match, sensor_prior)
         ):
             return
         j = self.nodes.index(nearest)
@@ -360,8 +361,7 @@ class Slam:
         field = window_field(grid, points, prior, LOOP_SEARCH_M)
         if field.empty:
             return None
-        matcher = ScanMatcher(c.sigma, LOOP_SEARCH_M, LOOP_SEARCH_RAD)
-        return matcher.match(field, points, prior, (1e3, 1e3)), field
+        return self.loop_matcher.match(field, points, prior, (1e3, 1e3)), field
 
     def rebuild_map(self) -> None:
         """Map every node's scan again at its (corrected) pose."""
@@ -383,11 +383,11 @@ class Slam:
 
 
 def ambiguous_loop_match(
-    field: DistanceField, points: FloatArray, match: MatchResult, prior: Pose2D, sigma: float
+    matcher: ScanMatcher, field: DistanceField, points: FloatArray, match: MatchResult, prior: Pose2D
 ) -> bool:
     """Whether the scan ``points`` (laser frame) fits the loop submap's ``field`` at another place almost as well
-    as at the loop ``match``: where refining from ``prior`` (where the graph puts the laser) ends, when that is
-    not where the match is. ``sigma``: the matcher's likelihood width (m).
+    as at the loop ``match`` that ``matcher`` found: where refining from ``prior`` (where the graph puts the
+    laser) ends, when that is not where the match is.
 
     Why: in a corridor with regular doors, or a hall seen through one opening, a scan fits two places about
     equally well, and the wide loop search returns whichever scored higher by a hair. The weakest-direction
@@ -398,8 +398,8 @@ def ambiguous_loop_match(
     """
     if _apart(match.pose, prior) <= LOOP_DISTINCT_M:
         return False
-    matcher = ScanMatcher(sigma, LOOP_SEARCH_M, LOOP_SEARCH_RAD)
-    local = matcher.refine(field, points, prior, prior=prior, spread=(LOOP_SEARCH_M, LOOP_SEARCH_RAD))
+    spread = (matcher.search_linear, matcher.search_angular)
+    local = matcher.refine(field, points, prior, prior=prior, spread=spread)
     if _apart(match.pose, local) <= LOOP_DISTINCT_M:
         return False
     return LOOP_AMBIGUITY * match.score <= matcher.evaluate(field, points, local).score

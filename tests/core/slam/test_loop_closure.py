@@ -118,7 +118,7 @@ def test_a_loop_match_on_a_look_alike_place_is_ambiguous():
     matcher = ScanMatcher(SlamConfig().sigma, LOOP_SEARCH_M, LOOP_SEARCH_RAD)
     twin = matcher.evaluate(field, points, Pose2D(1.0, 0.0, 0.0))  # one door on: the scan fits as well there
     assert twin.inlier_fraction > 0.9
-    assert ambiguous_loop_match(field, points, twin, here, SlamConfig().sigma)
+    assert ambiguous_loop_match(matcher, field, points, twin, here)
 
 
 def test_a_loop_match_that_fits_clearly_better_than_the_graph_is_not_ambiguous():
@@ -127,6 +127,6 @@ def test_a_loop_match_that_fits_clearly_better_than_the_graph_is_not_ambiguous()
     matcher = ScanMatcher(SlamConfig().sigma, LOOP_SEARCH_M, LOOP_SEARCH_RAD)
     match = matcher.evaluate(field, points, truth)
     # The graph 0.6 m off (the drift a loop closure corrects): the scan fits badly there.
-    assert not ambiguous_loop_match(field, points, match, Pose2D(-0.4, 0.6, 0.25), SlamConfig().sigma)
+    assert not ambiguous_loop_match(matcher, field, points, match, Pose2D(-0.4, 0.6, 0.25))
     # The graph 0.15 m off: refining from there slides onto the match, the same place.
-    assert not ambiguous_loop_match(field, points, match, Pose2D(-0.88, 0.42, 0.22), SlamConfig().sigma)
+    assert not ambiguous_loop_match(matcher, field, points, match, Pose2D(-0.88, 0.42, 0.22))
