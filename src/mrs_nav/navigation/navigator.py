@@ -22,8 +22,12 @@ angles in radians.
 
 With ``update(pose, now, defer=True)`` a needed plan is returned as a :class:`PlanRequest` for a worker
 (:meth:`run_plan`, then :meth:`finish_plan`). Meanwhile the robot follows the current path when the plan is only
-an offer (``periodic``) and stands still otherwise, and no other plan is started. A new goal, a cancel or
-reaching the goal discards the request in flight: its outcome is then ignored.
+an offer (``periodic``) or replaces a path that a new map blocks further on (``blocked``), up to
+``inflation_m`` plus a cell short of the first point of it in the latest map's inflated obstacles, and stands
+still otherwise; no other plan is started. Why: every point of the path before that one is clear of the walls
+by the inflation, and a planner's time budget is wall-clock time, which at a high sim rate would be seconds of
+standing still each time the map grows across the path. A new goal, a cancel or reaching the goal discards the
+request in flight: its outcome is then ignored.
 """
 
 from __future__ import annotations
@@ -52,7 +56,7 @@ from mrs_nav.navigation.plan_worker import (
     rrt_planner,
     run_plan,
 )
-from mrs_nav.navigation.replanning import ReplanPolicy, densify
+from mrs_nav.navigation.replanning import ReplanPolicy, densify, first_blocked_point
 from mrs_nav.planning import PlanResult, path_length
 
 __all__ = [
@@ -244,7 +248,7 @@ class Navigator:
         if self._follower is None:  # no valid plan: wait for the next attempt (or the plan in flight)
             return NavCommand(0.0, 0.0, new_path, tuple(events), request)
         command = self._follower.command(pose)
-        if command.u > 0.0 and self._driving_into(pose):  # a plan is in flight: wait for it, stopped
+        if command.u > 0.0 and (self._driving_into(pose) or self._at_blockage(pose)):  # wait for the plan, stopped
             return NavCommand(0.0, 0.0, new_path, tuple(events), request)
         return NavCommand(command.u, command.omega, new_path, tuple(events), request)
 
@@ -255,6 +259,18 @@ class Navigator:
             return False
         assert self._follower is not None
         return self._follower.command(pose).u > 0.0
+
+    def _at_blockage(self, pose: Pose2D) -> bool:
+        """Whether, with a plan in flight, the robot at ``pose`` is as close as it may come to the first point of
+        its path that the latest map blocks (module docstring)."""
+        if self._pending is None or self._follower is None:
+            return False
+        grid, raw = self._maps()
+        rest = self._follower.points[self._follower.segment :]
+        # No exception near the robot: one within the inflation of a wall stands still, as for any other plan.
+        point = first_blocked_point(grid, raw, rest, pose, near_m=0.0)
+        margin = self.config.inflation_m + grid.resolution
+        return point is not None and math.hypot(point[0] - pose.x, point[1] - pose.y) <= margin
 
     def _approach_step(self, pose: Pose2D, now: float, distance: float, events: list[NavEvent]) -> NavCommand:
         """Drive the last centimetres (and turn to the heading); the goal is reached when the approach is done."""
@@ -284,8 +300,7 @@ class Navigator:
         return None
 
     def replan_reason(self, pose: Pose2D, now: float) -> str | None:
-        """Why the next :meth:`update` at ``pose`` will plan (``None``: it will not). A node may stop the robot
-        first, since planning takes wall-clock time while a simulation runs on."""
+        """Why the next :meth:`update` at ``pose`` will plan (``None``: it will not)."""
         if not self._goal.active:
             return None
         grid, raw = self._maps()
@@ -306,7 +321,7 @@ class Navigator:
         if reason == "periodic" and self._follower is not None:
             rest = self._follower.points[self._follower.segment :]
             remaining = path_length(np.vstack(([pose.x, pose.y], rest[:, :2])))
-        else:
+        elif reason != "blocked":
             # the current path is unusable: stop following it whatever the outcome
             self._follower = None
             self.path = None
@@ -350,6 +365,8 @@ class Navigator:
         if result is None:
             if optional:
                 return None
+            self._follower = None  # a blocked path is not followed on after its replacement failed
+            self.path = None
             failed = self._policy.failed()
             limit = self.config.max_failed_plans
             events.append(

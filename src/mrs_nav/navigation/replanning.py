@@ -42,13 +42,17 @@ def densify(points: npt.ArrayLike, step: float) -> FloatArray:
     return np.vstack((out, xy[-1:]))
 
 
-def path_blocked(grid: OccupancyGrid, raw: OccupancyGrid, rest: FloatArray, pose: Pose2D, inflation_m: float) -> bool:
-    """Whether occupied cells of ``grid`` (inflated by ``inflation_m``) lie on the polyline ``rest``. Close to the
-    robot at ``pose`` only ``raw`` (the map before inflation) counts: the robot may legitimately be within the
-    inflation of a wall it is leaving."""
+def first_blocked_point(
+    grid: OccupancyGrid, raw: OccupancyGrid, rest: FloatArray, pose: Pose2D, near_m: float
+) -> FloatArray | None:
+    """The first point (``(2,)``) of the polyline ``rest`` on an occupied cell of ``grid`` (the map inflated for
+    planning), None when the way is clear. Within ``near_m`` of the robot at ``pose`` only ``raw`` (the map
+    before inflation) counts: the robot may legitimately be within the inflation of a wall it is leaving."""
     dense = densify(rest, grid.resolution / 2.0)
-    near = np.hypot(dense[:, 0] - pose.x, dense[:, 1] - pose.y) <= inflation_m + grid.resolution
-    return bool(np.any(grid.is_occupied(dense[~near])) or np.any(raw.is_occupied(dense[near])))
+    near = np.hypot(dense[:, 0] - pose.x, dense[:, 1] - pose.y) <= near_m
+    blocked = np.where(near, raw.is_occupied(dense), grid.is_occupied(dense))
+    hits = np.flatnonzero(blocked)
+    return dense[hits[0]] if hits.size else None
 
 
 class ReplanPolicy:
@@ -92,7 +96,10 @@ class ReplanPolicy:
             # give the map a moment to change before trying again
             return "retry" if now - self.last_plan_time >= cfg.retry_delay_s else None
         rest = follower.points[follower.segment :]
-        if self.map_version != self._checked_version and path_blocked(grid, raw, rest, pose, cfg.inflation_m):
+        if (
+            self.map_version != self._checked_version
+            and first_blocked_point(grid, raw, rest, pose, cfg.inflation_m + grid.resolution) is not None
+        ):
             return "blocked"
         self._checked_version = self.map_version
         if cross_track_distance(follower.holonomic_point(pose), rest) > cfg.stray_distance_m:

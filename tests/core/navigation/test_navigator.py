@@ -396,6 +396,52 @@ def test_a_deferred_plan_keeps_the_robot_following_its_path_until_adopted() -> N
     assert planner.calls == 2
 
 
+def blocked_ahead(planner) -> tuple[Navigator, NavCommand, float]:
+    """A navigator on its way from (-1.5, -1.5) to (1.5, -1.5) whose straight path a new map blocks with a wall
+    across it at x = 0.5; the command of the step that asks for the replacement plan, and the x where the path
+    first enters the wall's inflation."""
+    nav = Navigator(planner, NavigatorConfig(replan_period_s=1e9, plan_turned_round=False))
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(1.5, -1.5, 0.0)
+    first = nav.update(Pose2D(-1.5, -1.5, 0.0), 0.0, defer=True).request
+    assert first is not None
+    assert nav.finish_plan(first, nav.run_plan(first)).path is not None
+    nav.set_map(with_wall(arena(), 0.5, -1.95, 0.6, 0.5), 0.5)
+    blocked = nav.inflated_grid.is_occupied(np.column_stack((np.arange(-1.5, 1.5, 0.01), np.full(300, -1.5))))
+    return nav, nav.update(Pose2D(-1.5, -1.5, 0.0), 0.5, defer=True), -1.5 + 0.01 * int(np.argmax(blocked))
+
+
+def test_a_path_blocked_further_on_is_followed_short_of_the_blockage_until_replaced() -> None:
+    nav, asked, edge = blocked_ahead(astar)
+    assert asked.request is not None
+    assert asked.request.reason == "blocked"
+    assert asked.u > 0.0  # 1.8 m of the path are clear: the robot drives on while the new plan is made
+    margin = nav.config.inflation_m + RES
+    assert nav.update(Pose2D(edge - margin - 0.1, -1.5, 0.0), 0.6, defer=True).u > 0.0
+    assert nav.update(Pose2D(edge - margin + 0.05, -1.5, 0.0), 0.7, defer=True).u == 0.0  # no nearer
+    adopted = nav.finish_plan(asked.request, nav.run_plan(asked.request))
+    assert adopted.path is not None
+    assert kinds(adopted.events) == [EventKind.PLANNED]
+    assert adopted.path[:, 1].max() > 0.5  # around the top of the wall
+    assert not np.any(nav.inflated_grid.is_occupied(densify(adopted.path[1:], 0.01)))
+
+
+def test_a_blocked_path_whose_replacement_fails_is_not_followed_on() -> None:
+    def once(grid: OccupancyGrid, start: Pose2D, goal: tuple[float, float], rng) -> PlanResult:
+        if calls:
+            raise NoPathFoundError("time budget used up")
+        calls.append(start)
+        return astar(grid, start, goal, rng)
+
+    calls: list[Pose2D] = []
+    nav, asked, edge = blocked_ahead(once)
+    assert asked.request is not None
+    failed = nav.finish_plan(asked.request, nav.run_plan(asked.request))
+    assert kinds(failed.events) == [EventKind.PLAN_FAILED]
+    assert nav.path is None
+    assert nav.update(Pose2D(edge - 1.0, -1.5, 0.0), 0.6, defer=True).u == 0.0
+
+
 def test_a_new_goal_discards_the_plan_in_flight_for_the_old_one() -> None:
     nav = Navigator(astar)
     nav.set_map(arena(), 0.0)
