@@ -96,10 +96,10 @@ class BeamSplit:
 
 @dataclass(frozen=True)
 class StoredBeams:
-    """A :class:`BeamSplit` as kept for every processed scan, to rebuild the map after a loop closure: angles
-    and ranges in float32 (micro-radians and micrometres at building scale, far below a map cell) and the
-    free-space beams' common length once: half the float64 arrays' bytes (2.6 KB for a 360-beam scan instead of
-    5.2 KB), so a long-running node's memory grows half as fast with the path."""
+    """A :class:`BeamSplit` as kept for the scans the map is rebuilt from after a loop closure (the graph's
+    nodes and a few beside each): angles and ranges in float32 (micro-radians and micrometres at building scale,
+    far below a map cell) and the free-space beams' common length once: half the float64 arrays' bytes (2.6 KB
+    for a 360-beam scan instead of 5.2 KB), so the node's memory grows half as fast with the mapped extent."""
 
     hit_angles: npt.NDArray[np.float32]
     hit_ranges: npt.NDArray[np.float32]

@@ -8,6 +8,7 @@ from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.sim.simulator import SimulatorConfig
 from mrs_nav.slam.consistency import BROKEN_FRACTION, free_endpoint_fraction
 from mrs_nav.slam.sim_drive import drive_with_slam
+from mrs_nav.slam.slam import SCANS_KEPT_PER_NODE
 
 CORNERS = ((1.5, -1.5), (1.5, 1.5), (-1.5, 1.5), (-1.5, -1.5))
 LAP_M = 12.0  # m, once round the four corners
@@ -29,6 +30,8 @@ def test_eight_laps_of_the_arena_keep_the_graph_bounded_and_the_map_right() -> N
     print(f"nodes after lap 2: {after_two}, after lap {LAPS}: {len(slam.nodes)}, processed {len(slam.processed)}")
     # Six more laps add at most a few nodes where noise put a pose farther than the keyframe gates from every node.
     assert len(slam.nodes) <= after_two + 5
-    assert len(slam.processed) >= 3 * len(slam.nodes)  # most scans were matched and mapped, not stored
+    assert len(slam.processed) >= 3 * len(slam.nodes)  # most scans were matched and mapped, not made nodes
+    # and of those, a bounded number per node is kept for rebuilding the map
+    assert slam.stored_scans <= (1 + SCANS_KEPT_PER_NODE) * len(slam.nodes) < len(slam.processed)
     assert result.iou >= 0.9
     assert free_endpoint_fraction(slam) < BROKEN_FRACTION

@@ -9,6 +9,9 @@ trajectory the SLAM would have had without it."""
 import dataclasses
 from pathlib import Path
 
+import numpy as np
+
+from mrs_nav.maps.occupancy_grid import OCCUPIED, UNKNOWN
 from mrs_nav.maps.world import load_world
 from mrs_nav.sim.laser import LaserParams
 from mrs_nav.sim.simulator import SimulatorConfig
@@ -59,3 +62,20 @@ def test_closing_the_loop_makes_a_drifted_map_consistent_and_leaves_the_others_a
     # Seeds 2 and 5 drift: ATE 0.053 / 0.068 m without the closure, 0.017 / 0.020 m with it; end points on free
     # cells 0.019 / 0.019 without, 0.016 / 0.017 with it. Seeds 1, 3 and 4 end at 0.021-0.044 m either way.
     assert len(drifted) >= 2, drifted
+
+
+def test_a_rebuilt_map_keeps_the_scans_between_nodes() -> None:
+    # A sparse laser (90 beams, 5 cm range noise): 171 of the loop's 410 processed scans are nodes. Rebuilt from
+    # the nodes' scans alone, this map lost 23 % of its occupied cells (3162 -> 2424) and 4.6 % of its known cells
+    # changed; with the scans kept beside the nodes, 1.6 % and 0.3 %. No closure here: the rebuild should
+    # reproduce the map the scans made as they came.
+    sim = SimulatorConfig(odom_noise=0.05, seed=1, laser=LaserParams(noise_sigma=0.05, beams=90))
+    slam = loop(sim, loop_closure=False).slam
+    assert len(slam.nodes) <= 0.5 * len(slam.processed)
+    before = slam.grid.to_occupancy().copy()
+    slam.rebuild_map()
+    after = slam.grid.to_occupancy()
+    assert after.shape == before.shape
+    assert np.count_nonzero(after == OCCUPIED) >= 0.97 * np.count_nonzero(before == OCCUPIED)
+    known = (before != UNKNOWN) | (after != UNKNOWN)
+    assert np.mean(before[known] != after[known]) <= 0.01
