@@ -4,9 +4,8 @@ Subscribes ``scan`` (sensor_msgs/LaserScan). For every scan it looks up the odom
 (``odom_frame -> base_frame``) at the scan's stamp through tf, waiting up to ``~tf_wait`` s for the odometry to
 catch up instead of dropping the scan on extrapolation, and feeds the pair to the core, which processes it when
 the update gates open. Publishes ``map`` (nav_msgs/OccupancyGrid, latched) and ``map_metadata`` (latched) every
-``~map_update_interval`` s of map change, drawn from the latest corrected poses, and tf ``map_frame ->
-odom_frame`` every ``~transform_publish_period`` s (20 Hz by default). Parameters take gmapping's names (see
-config/slam.yaml and the README).
+``~map_update_interval`` s of map change, and tf ``map_frame -> odom_frame`` every ``~transform_publish_period``
+s (20 Hz by default). Parameters take gmapping's names (see config/slam.yaml and the README).
 
 A scan that cannot be used (wrong length, NaN angles, bad geometry, no transform, a pose far outside any
 building) is logged (throttled) and skipped; the node never dies of one and no message changes the map but by
@@ -175,9 +174,6 @@ class SlamNode:
         with self._lock:
             if self._slam is None:
                 return
-            # A closure that moved the graph by less than a cell left the map as it was; what is published (and
-            # saved by map_saver) is the map of the corrected poses.
-            self._slam.finish()
             grid = self._slam.grid
             data = grid.to_occupancy()
             info = MapMetaData()

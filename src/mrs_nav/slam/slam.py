@@ -368,8 +368,7 @@ class Slam:
         )
 
     def finish(self) -> None:
-        """Bring the map up to the latest corrected poses (after the last scan of a log, before a map is
-        published): a rebuild only when a closure moved a node since the map was last drawn."""
+        """Bring the map up to the latest corrected poses (after the last scan of a log)."""
         if self.map_lag() > 0.0:
             self.rebuild_map()
 
