@@ -21,8 +21,9 @@ The robot stops (the goal kept) when the ``map -> odom`` correction is older tha
 the last scan older than ``~scan_timeout`` (sim time): a localisation source or laser that died.
 
 Planning runs in one worker thread, off the control timer: the timer keeps publishing ``cmd_vel`` every period
-(following the current path during a periodic replan, a zero Twist while there is no usable path), so a lockstep
-simulator is never held still by a plan, and adopts the plan on the first tick after it is done.
+(following the current path, short of any new obstacle on it, during a periodic replan or one for a path blocked
+further on; a zero Twist while there is no usable path), so a lockstep simulator is never held still by a plan,
+and adopts the plan on the first tick after it is done.
 """
 
 from __future__ import annotations
