@@ -73,6 +73,10 @@ class SlamNode:
         self.config = config
         self._lock = threading.Lock()
         self._slam: Slam | None = None  # made at the first scan, once the laser's mounting is known
+        # map -> odom as of the last processed scan, read by the tf timer without the lock: a scan match, and a
+        # map rebuild after a closure (0.1 s and more on a large map), must not delay the correction past the
+        # navigators' correction_freshness (0.15 s), or they stop the robot while SLAM is merely busy.
+        self._correction: Pose2D | None = None
         self._mountings: dict[str, Pose2D] = {}  # base -> scan frame, per frame seen (static mountings)
         self._last_clock = -math.inf
         self._last_map_time = -math.inf
@@ -118,6 +122,7 @@ class SlamNode:
                     self._slam = Slam(self.config.slam, mounting, keep_trajectory=False)
                     self._last_map_time = -math.inf
                 done = self._slam.add_scan(odom, scan, stamp, laser_pose=mounting)
+                self._correction = self._slam.map_to_odom
         except MrsNavError as err:
             rospy.logwarn_throttle(5.0, f"slam: skipping scan at {stamp:.3f} (frame {msg.header.frame_id!r}): {err}")
             return
@@ -143,6 +148,7 @@ class SlamNode:
         rospy.logwarn(f"slam: {reason}; starting a new map")
         with self._lock:
             self._slam = None
+            self._correction = None
             self._mountings.clear()
         self._last_tf_stamp = -math.inf
 
@@ -153,10 +159,9 @@ class SlamNode:
     # -- outputs --------------------------------------------------------------------------------------------------
 
     def _publish_transform(self, _event: Any) -> None:
-        with self._lock:
-            if self._slam is None:
-                return
-            correction = self._slam.map_to_odom
+        correction = self._correction
+        if correction is None:
+            return
         # Dated slightly ahead, as gmapping does, so lookups at the newest odometry stamp find it.
         stamp = (rospy.Time.now() + rospy.Duration(self.config.transform_publish_period)).to_sec()
         if stamp <= self._last_tf_stamp:
