@@ -72,7 +72,8 @@ LOOP_SIGMA = (0.05, math.radians(1.5))  # m, rad: a verified loop match
 LOOP_AFTER_CLOSURE_M = 3.0  # m of travel after a closure before the next attempt (the map there is fresh)
 # Rebuild the map once a pose it was built from is this many cells off. At 2 a closure could leave walls mapped
 # twice, 2 cells apart, in the published map until the next large move (Intel: 0.10 m after a closure, 4
-# rebuilds); at 1, 0.04 m at most, for 10 rebuilds of about 0.11 s CPU each on the 740-node Intel graph.
+# rebuilds); at 1, 0.04 m at most, for 8-10 rebuilds of up to 0.15 s CPU each on Intel (713 nodes and 882 scans
+# stored at the last one).
 REBUILD_AFTER_CELLS = 1.0
 # A node per place and heading, at the update gates' scale (linearUpdate, angularUpdate 0.2): while exploring,
 # every processed scan (0.2 m or 0.2 rad apart) is still a node; the heading tolerance is wider because the
