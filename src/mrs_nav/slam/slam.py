@@ -147,8 +147,8 @@ class Slam:
         self.loops_solved = 0
         self._last_loop_attempt = 0.0
         self._mapped: list[Pose2D] = []  # the pose each node was mapped at
-        # per node: scans in its place (SCANS_KEPT_PER_NODE), as (stamp, laser pose in the node's frame, beams)
-        self._kept: list[list[tuple[float, Pose2D, StoredBeams]]] = []
+        # per node: scans in its place (SCANS_KEPT_PER_NODE), as (laser pose in the node's frame, beams)
+        self._kept: list[list[tuple[Pose2D, StoredBeams]]] = []
         self._map_to_odom = Pose2D(0.0, 0.0, 0.0)
         # With loop closure, consecutive nodes are linked by the local track's motion (mrs_nav.slam.local_track)
         self._local = LocalTrack(c, self.matcher) if c.loop_closure else None
@@ -238,12 +238,14 @@ class Slam:
             self._add_node(record)
         else:
             self._track(record, nearest)
-            self._keep(record, nearest)
         self.last = record
+        nodes = len(self.nodes)
         growing = bool(self.nodes) and travelled - self.nodes[-1].travelled <= LOOP_GROWING_M
         if c.loop_closure and growing and travelled - self._last_loop_attempt >= LOOP_EVERY_M:
             self._last_loop_attempt = travelled
             self._try_loop(record, thinned)
+        if nearest is not None and len(self.nodes) == nodes:  # a scan that closed a loop is a node of its own
+            self._keep(record, nearest)
         return self.last
 
     def _nearest_node(self, pose: Pose2D) -> int | None:
@@ -302,7 +304,7 @@ class Slam:
         kept = self._kept[node]
         if record.beams is not None and len(kept) < SCANS_KEPT_PER_NODE:
             laser = record.pose.compose(record.laser_pose).relative_to(self.nodes[node].pose)
-            kept.append((record.stamp, laser, record.beams))
+            kept.append((laser, record.beams))
 
     def _try_loop(self, current: ProcessedScan, thinned: FloatArray) -> None:
         """Look for a loop closure of the latest scan (``thinned``: its end points as the matcher takes them,
@@ -341,9 +343,7 @@ class Slam:
             self.loops_rejected += 1
             return
         if not is_node:
-            # The scan that closes the loop becomes a node: it is the loop edge's end (and no longer kept by another).
-            for kept in self._kept:
-                kept[:] = [entry for entry in kept if entry[0] != current.stamp]
+            # The scan that closes the loop becomes a node: it is the loop edge's end.
             self.edges.append(edges[-1])
             self._append_node(current)
             if self.keep_trajectory:
@@ -395,7 +395,7 @@ class Slam:
         for record, kept in zip(self.nodes, self._kept, strict=True):
             if record.beams is not None:
                 self.grid.integrate(record.pose.compose(record.laser_pose), record.beams.split())
-            for _, laser, beams in kept:
+            for laser, beams in kept:
                 self.grid.integrate(record.pose.compose(laser), beams.split())
         self._mapped = [r.pose for r in self.nodes]
 

@@ -407,8 +407,9 @@ def blocked_ahead(planner) -> tuple[Navigator, NavCommand, float]:
     assert first is not None
     assert nav.finish_plan(first, nav.run_plan(first)).path is not None
     nav.set_map(with_wall(arena(), 0.5, -1.95, 0.6, 0.5), 0.5)
-    blocked = nav.inflated_grid.is_occupied(np.column_stack((np.arange(-1.5, 1.5, 0.01), np.full(300, -1.5))))
-    return nav, nav.update(Pose2D(-1.5, -1.5, 0.0), 0.5, defer=True), -1.5 + 0.01 * int(np.argmax(blocked))
+    xs = np.arange(-1.5, 1.5, 0.01)
+    blocked = nav.inflated_grid.is_occupied(np.column_stack((xs, np.full_like(xs, -1.5))))
+    return nav, nav.update(Pose2D(-1.5, -1.5, 0.0), 0.5, defer=True), float(xs[np.argmax(blocked)])
 
 
 def test_a_path_blocked_further_on_is_followed_short_of_the_blockage_until_replaced() -> None:
