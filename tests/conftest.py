@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -13,6 +14,8 @@ from hypothesis import HealthCheck, settings
 from tests.rosharness import REPO, RosMaster
 
 WORLDS = REPO / "worlds"
+# what rospy itself keeps registered for the test node: its log and, on sim time, the clock
+_NODE_TOPICS = {"/rosout", "/clock"}
 
 # Property tests are derandomised (the same examples every run, so CI never flakes) and carry no deadline or
 # speed health check: the 2-core machines run ROS processes beside them and timing is not what they test.
@@ -40,6 +43,30 @@ def rospy_node(ros_master: RosMaster) -> Any:
     rospy.set_param("/use_sim_time", True)
     rospy.init_node("pytest", anonymous=True, disable_signals=True)
     return rospy
+
+
+def _registered_topics() -> set[str]:
+    """Topics the test node has publishers or subscribers on (none if this process never joined ROS)."""
+    rospy = sys.modules.get("rospy")  # not imported here: modules without ROS must not load it
+    if rospy is None or not rospy.core.is_initialized():
+        return set()
+    from rospy.impl.registration import get_topic_manager
+
+    manager = get_topic_manager()
+    return {name for name, _ in manager.get_publications() + manager.get_subscriptions()} - _NODE_TOPICS
+
+
+@pytest.fixture(scope="module", autouse=True)
+def no_leaked_topics() -> Iterator[None]:
+    """Fail a test module that leaves topics registered in the shared test node.
+
+    Every ROS test module shares one master and one test node, so a publisher a module forgets outlives it: a
+    latched one hands its last message to every node later modules launch (a NaN scan reached a later SLAM node
+    this way), and any handle left open keeps the latch of the whole topic alive in this process."""
+    before = _registered_topics()
+    yield
+    leaked = sorted(_registered_topics() - before)
+    assert not leaked, f"topics left registered by this module: {leaked}"
 
 
 @pytest.fixture

@@ -87,5 +87,6 @@ class Drive:
             return np.array([p for p in self.pairs if p[0] >= t0]).reshape(-1, 3)
 
     def close(self) -> None:
+        self.cmd.unregister()
         for sub in self.subs:
             sub.unregister()

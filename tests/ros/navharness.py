@@ -163,3 +163,10 @@ class IdentityCorrection:
     def close(self) -> None:
         self.stop()
         self.broadcaster.pub_tf.unregister()
+
+
+def close_action_client(client: Any) -> None:
+    """Unregister a SimpleActionClient's topics, which actionlib leaves to the process's end."""
+    inner = client.action_client
+    for topic in (inner.pub_goal, inner.pub_cancel, inner.status_sub, inner.result_sub, inner.feedback_sub):
+        topic.unregister()

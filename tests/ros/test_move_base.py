@@ -13,7 +13,13 @@ import pytest
 
 from mrs_nav.maps.obstacles import Obstacles
 from mrs_nav.maps.world import Box, load_world
-from tests.ros.navharness import FOOTPRINT_RADIUS, IdentityCorrection, TruthTrack, world_map_msg
+from tests.ros.navharness import (
+    FOOTPRINT_RADIUS,
+    IdentityCorrection,
+    TruthTrack,
+    close_action_client,
+    world_map_msg,
+)
 from tests.rosharness import REPO, RosMaster, wait_for
 
 pytestmark = pytest.mark.ros
@@ -61,6 +67,7 @@ def arena(ros_master: RosMaster, rospy_node: Any) -> Iterator[dict[str, Any]]:
         state = {"rospy": rospy, "truth": truth, "client": client, "procs": (sim, nav), "correction": correction}
         yield state
         state["correction"].close()
+        close_action_client(client)
         map_pub.unregister()
         truth.close()
 

@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from tests.ros.navharness import FOOTPRINT_RADIUS, TruthTrack
+from tests.ros.navharness import FOOTPRINT_RADIUS, TruthTrack, close_action_client
 from tests.ros.test_move_base import XY_TOLERANCE, YAW_TOLERANCE, target
 from tests.rosharness import RosMaster, wait_for
 
@@ -86,6 +86,7 @@ def test_goals_with_headings_then_a_blind_robot_stops(ros_master: RosMaster, ros
             assert "map->odom correction" in status  # among every reason that holds (a scan can be late under load)
             assert proc.poll() is None
             client.cancel_all_goals()
+            close_action_client(client)
     finally:
         corrections.sub.unregister()
         truth.close()

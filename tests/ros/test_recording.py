@@ -70,6 +70,7 @@ def _record(master: RosMaster, rospy: Any, bag: Path, options: str, *, kill: boo
             wait_for(lambda: turned() and _scans_on_disk(written, probe) >= MIN_SCANS, 120.0, "scans on disk", 0.5)
             if kill:
                 os.kill(_node_pid(master, "/record"), signal.SIGKILL)
+    cmd.unregister()
 
 
 def test_closed_recording_replays(ros_master: RosMaster, rospy_node: Any, tmp_path: Path, capsys: Any) -> None:
