@@ -1,4 +1,5 @@
-"""Broadcasting a map -> odom correction on a timer, the part every map-frame node (SLAM, localisation) shares.
+"""tf for the map-frame nodes (SLAM, localisation): broadcasting their map -> odom correction on a timer, looking
+up poses, and naming the frames tf knows when a lookup fails.
 
 The transform is dated ``ahead`` seconds past now, as gmapping and AMCL do, so lookups at the newest odometry
 stamp find it. At maximum sim rate a timer can fire twice in one clock tick; tf rejects a repeated stamp, so a
@@ -11,6 +12,7 @@ import math
 
 import rospy
 import tf2_ros
+import yaml
 
 from mrs_nav.geometry import Pose2D
 from mrs_nav.ros.conversions import pose_from_transform, transform_stamped
@@ -42,3 +44,10 @@ class MapOdomBroadcaster:
 def lookup_pose(buffer: tf2_ros.Buffer, parent: str, child: str, stamp: rospy.Time, wait: float) -> Pose2D:
     """``child`` in ``parent`` at ``stamp``, waiting up to ``wait`` s for the transform to arrive."""
     return pose_from_transform(buffer.lookup_transform(parent, child, stamp, rospy.Duration(wait)))
+
+
+def known_frames(buffer: tf2_ros.Buffer) -> str:
+    """The frames ``buffer`` has heard of, for a warning about a frame it lacks ("none" before any tf arrived)."""
+    tree = yaml.safe_load(buffer.all_frames_as_yaml()) or {}
+    frames = set(tree) | {str(entry.get("parent")) for entry in tree.values()}
+    return ", ".join(sorted(frames)) or "none"

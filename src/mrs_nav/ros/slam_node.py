@@ -30,7 +30,8 @@ from std_srvs.srv import Empty, EmptyRequest, EmptyResponse
 
 from mrs_nav.errors import MrsNavError
 from mrs_nav.geometry import Pose2D
-from mrs_nav.ros.conversions import any_reading, pose_from_transform, pose_msg, scan_data, transform_stamped
+from mrs_nav.ros.conversions import any_reading, pose_msg, scan_data
+from mrs_nav.ros.map_odom import MapOdomBroadcaster, known_frames, lookup_pose
 from mrs_nav.ros.navigation_conversions import publish_unless_shutdown
 from mrs_nav.ros.params import private_param
 from mrs_nav.slam import Slam, SlamConfig
@@ -80,10 +81,10 @@ class SlamNode:
         self._mountings: dict[str, Pose2D] = {}  # base -> scan frame, per frame seen (static mountings)
         self._last_clock = -math.inf
         self._last_map_time = -math.inf
-        self._last_tf_stamp = -math.inf
         self._buffer = tf2_ros.Buffer(cache_time=rospy.Duration(30.0))
         self._listener = tf2_ros.TransformListener(self._buffer)
-        self._broadcaster = tf2_ros.TransformBroadcaster()
+        # dated one period ahead, as gmapping does, so lookups at the newest odometry stamp find it
+        self._map_odom = MapOdomBroadcaster(config.map_frame, config.odom_frame, config.transform_publish_period)
         self._map_pub = rospy.Publisher("map", OccupancyGrid, queue_size=1, latch=True)
         self._meta_pub = rospy.Publisher("map_metadata", MapMetaData, queue_size=1, latch=True)
         self._scan_sub = rospy.Subscriber("scan", LaserScan, self._on_scan, queue_size=5)
@@ -111,7 +112,9 @@ class SlamNode:
                 # A call of its own, so that its throttle is its own: the transient "odometry not there yet" below
                 # must not hide a frame that will never work.
                 rospy.logwarn_throttle(
-                    5.0, f"slam: dropping scans in frame {msg.header.frame_id!r}: no transform to the base: {err}"
+                    5.0,
+                    f"slam: dropping scans in frame {msg.header.frame_id!r}: no transform to the base: {err} "
+                    f"(frames on tf: {known_frames(self._buffer)})",
                 )
                 return
             odom = self._lookup(self.config.odom_frame, self.config.base_frame, msg.header.stamp)
@@ -134,9 +137,7 @@ class SlamNode:
             self._publish_map(msg.header.stamp)
 
     def _lookup(self, parent: str, child: str, stamp: rospy.Time) -> Pose2D:
-        """``child`` in ``parent`` at ``stamp``, waiting up to ``tf_wait`` s for the transform to arrive."""
-        tf = self._buffer.lookup_transform(parent, child, stamp, rospy.Duration(self.config.tf_wait))
-        return pose_from_transform(tf)
+        return lookup_pose(self._buffer, parent, child, stamp, self.config.tf_wait)
 
     def _mounting(self, frame: str, stamp: rospy.Time) -> Pose2D:
         """base -> ``frame`` from tf (looked up once per frame: laser mountings are static)."""
@@ -150,7 +151,7 @@ class SlamNode:
             self._slam = None
             self._correction = None
             self._mountings.clear()
-        self._last_tf_stamp = -math.inf
+        self._map_odom.reset()
 
     def _on_reset(self, _request: EmptyRequest) -> EmptyResponse:
         self._reset("reset requested on ~reset")
@@ -160,20 +161,8 @@ class SlamNode:
 
     def _publish_transform(self, _event: Any) -> None:
         correction = self._correction
-        if correction is None:
-            return
-        # Dated slightly ahead, as gmapping does, so lookups at the newest odometry stamp find it.
-        stamp = (rospy.Time.now() + rospy.Duration(self.config.transform_publish_period)).to_sec()
-        if stamp <= self._last_tf_stamp:
-            # At maximum sim rate the timer can fire twice in one clock tick; tf rejects a repeated stamp.
-            return
-        self._last_tf_stamp = stamp
-        try:
-            self._broadcaster.sendTransform(
-                transform_stamped(correction, stamp, self.config.map_frame, self.config.odom_frame)
-            )
-        except rospy.ROSException as err:  # shutting down
-            rospy.logdebug(f"slam: map->odom not sent: {err}")
+        if correction is not None:
+            self._map_odom.send(correction)
 
     def _publish_map(self, stamp: rospy.Time) -> None:
         with self._lock:
