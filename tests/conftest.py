@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import signal
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -25,12 +26,23 @@ settings.register_profile(
 settings.load_profile("mrs_nav")
 
 
+def _interrupt(signum: int, _frame: object) -> None:
+    raise KeyboardInterrupt(f"signal {signum}")
+
+
 @pytest.fixture(scope="session")
 def ros_master(tmp_path_factory: pytest.TempPathFactory) -> Iterator[RosMaster]:
-    """One roscore on a free port for the session, shut down at the end."""
+    """One roscore on a free port for the session, shut down at the end.
+
+    A SIGTERM to pytest becomes an interrupt, so that the session's teardown still ends every process the tests
+    launched: killed outright, pytest left its launches' simulators running at maximum rate."""
+    previous = signal.signal(signal.SIGTERM, _interrupt)
     master = RosMaster(tmp_path_factory.mktemp("ros"))
-    yield master
-    master.close()
+    try:
+        yield master
+    finally:
+        master.close()
+        signal.signal(signal.SIGTERM, previous)
 
 
 @pytest.fixture(scope="session")
