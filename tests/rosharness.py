@@ -16,6 +16,7 @@ import uuid
 import xmlrpc.client
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 from mrs_nav.ros_processes import TAG_VARIABLE, free_port, kill_tagged, process, stop
 
@@ -46,6 +47,51 @@ def wait_for(predicate: Callable[[], bool], timeout: float, what: str, period: f
             return
         time.sleep(period)
     raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
+
+
+class _TimeoutTransport(xmlrpc.client.Transport):
+    """XML-RPC with a socket timeout: a node that stopped answering must not hang a failure report."""
+
+    def __init__(self, timeout: float) -> None:
+        super().__init__()
+        self.timeout = timeout
+
+    def make_connection(self, host: Any) -> Any:
+        connection = super().make_connection(host)
+        connection.timeout = self.timeout
+        return connection
+
+
+def _call(uri: str, method: str, *args: Any, timeout: float = 5.0) -> Any:
+    code, message, value = getattr(xmlrpc.client.ServerProxy(uri, transport=_TimeoutTransport(timeout)), method)(
+        "/pytest", *args
+    )
+    if code != 1:
+        raise OSError(message)
+    return value
+
+
+def unconnected(master_uri: str, limit: int = 30) -> list[str]:
+    """Each ``topic: publisher -> subscriber`` the master lists whose connection the publisher does not have.
+
+    A publisher adds a subscriber's connection only after the handshake, so this names subscribers that never got
+    a publisher's messages (a subscriber's own bus info lists a connection before it is made). For the message
+    of a test that timed out waiting for a launch: it tells a node that stopped accepting from one that is slow."""
+    publications, subscriptions, _ = _call(master_uri, "getSystemState")
+    subscribers = {topic: set(nodes) for topic, nodes in subscriptions}
+    lines: list[str] = []
+    for node in sorted({node for _, nodes in publications for node in nodes}):
+        try:
+            bus = _call(_call(master_uri, "lookupNode", node), "getBusInfo")
+        except (OSError, xmlrpc.client.Error) as err:
+            lines.append(f"{node}: not answering ({err})")
+            continue
+        # outbound entries: (id, subscriber's caller id, "o", transport, topic, connected, ...)
+        served = {(entry[4], entry[1]) for entry in bus if entry[2] == "o"}
+        for topic, nodes in publications:
+            waiting = sorted(s for s in subscribers.get(topic, ()) if node in nodes and (topic, s) not in served)
+            lines += [f"{topic}: {node} -> {s}" for s in waiting]
+    return lines[:limit] + ([f"... and {len(lines) - limit} more"] if len(lines) > limit else [])
 
 
 class RosMaster:
@@ -85,6 +131,12 @@ class RosMaster:
         """Run ``roslaunch mrs_nav LAUNCH_FILE ARGS`` for the duration of the ``with`` block."""
         log = self.log_dir / f"{name or Path(launch_file).stem}-{time.monotonic_ns()}.log"
         with process(["roslaunch", "--wait", "mrs_nav", launch_file, *args], self.env, log) as proc:
-            yield proc
+            try:
+                yield proc
+            except AssertionError as err:
+                if str(err).startswith("timed out"):
+                    missing = "; ".join(unconnected(self.uri)) or "none"
+                    err.add_note(f"connections the master lists and the publisher lacks: {missing}")
+                raise
         # Keep the launch log next to the failure: pytest shows it with -rA on error.
         print(f"roslaunch log: {log}")
