@@ -78,9 +78,13 @@ def unconnected(master_uri: str, limit: int = 30) -> list[str]:
     a publisher's messages (a subscriber's own bus info lists a connection before it is made). For the message
     of a test that timed out waiting for a launch: it tells a node that stopped accepting from one that is slow."""
     publications, subscriptions, _ = _call(master_uri, "getSystemState")
-    subscribers = {topic: set(nodes) for topic, nodes in subscriptions}
+    subscribers = dict(subscriptions)
+    topics_of: dict[str, list[str]] = {}
+    for topic, nodes in publications:
+        for node in nodes:
+            topics_of.setdefault(node, []).append(topic)
     lines: list[str] = []
-    for node in sorted({node for _, nodes in publications for node in nodes}):
+    for node, topics in sorted(topics_of.items()):
         try:
             bus = _call(_call(master_uri, "lookupNode", node), "getBusInfo")
         except (OSError, xmlrpc.client.Error) as err:
@@ -88,9 +92,7 @@ def unconnected(master_uri: str, limit: int = 30) -> list[str]:
             continue
         # outbound entries: (id, subscriber's caller id, "o", transport, topic, connected, ...)
         served = {(entry[4], entry[1]) for entry in bus if entry[2] == "o"}
-        for topic, nodes in publications:
-            waiting = sorted(s for s in subscribers.get(topic, ()) if node in nodes and (topic, s) not in served)
-            lines += [f"{topic}: {node} -> {s}" for s in waiting]
+        lines += [f"{t}: {node} -> {s}" for t in topics for s in sorted(subscribers.get(t, ())) if (t, s) not in served]
     return lines[:limit] + ([f"... and {len(lines) - limit} more"] if len(lines) > limit else [])
 
 

@@ -49,28 +49,30 @@ def _record(master: RosMaster, rospy: Any, bag: Path, options: str, *, kill: boo
     are in the bag."""
     from geometry_msgs.msg import Twist
 
-    cmd = rospy.Publisher("/cmd_vel", Twist, queue_size=1)
     turn = Twist()
     turn.linear.x, turn.angular.z = 0.05, 1.0
     written = Path(f"{bag}.active")
-    with master.launch("simulation.launch", "real_time_factor:=0", name=f"sim-{bag.stem}"):
-        wait_for(lambda: rospy.get_time() > 0.5, 60.0, "/clock from the simulator")
-        with master.launch("record.launch", f"bag:={bag}", f"options:={options}", name=f"record-{bag.stem}"):
-            wait_for(written.is_file, 30.0, f"{written} from rosbag record")
-            start = rospy.get_time()
+    cmd = rospy.Publisher("/cmd_vel", Twist, queue_size=1)
+    try:
+        with master.launch("simulation.launch", "real_time_factor:=0", name=f"sim-{bag.stem}"):
+            wait_for(lambda: rospy.get_time() > 0.5, 60.0, "/clock from the simulator")
+            with master.launch("record.launch", f"bag:={bag}", f"options:={options}", name=f"record-{bag.stem}"):
+                wait_for(written.is_file, 30.0, f"{written} from rosbag record")
+                start = rospy.get_time()
 
-            def turned() -> bool:
-                cmd.publish(turn)  # the simulator's watchdog stops the robot without fresh commands
-                return bool(rospy.get_time() > start + 8.0)
+                def turned() -> bool:
+                    cmd.publish(turn)  # the simulator's watchdog stops the robot without fresh commands
+                    return bool(rospy.get_time() > start + 8.0)
 
-            wait_for(turned, 120.0, "8 sim seconds of recording")
-            # rosbag record may subscribe to /scan well after the file is open (at max rate 8 sim seconds can
-            # pass first on a loaded machine): the scans must be on disk before the kill loses its queue.
-            probe = bag.with_name(f"{bag.stem}-probe.bag")
-            wait_for(lambda: turned() and _scans_on_disk(written, probe) >= MIN_SCANS, 120.0, "scans on disk", 0.5)
-            if kill:
-                os.kill(_node_pid(master, "/record"), signal.SIGKILL)
-    cmd.unregister()
+                wait_for(turned, 120.0, "8 sim seconds of recording")
+                # rosbag record may subscribe to /scan well after the file is open (at max rate 8 sim seconds can
+                # pass first on a loaded machine): the scans must be on disk before the kill loses its queue.
+                probe = bag.with_name(f"{bag.stem}-probe.bag")
+                wait_for(lambda: turned() and _scans_on_disk(written, probe) >= MIN_SCANS, 120.0, "scans on disk", 0.5)
+                if kill:
+                    os.kill(_node_pid(master, "/record"), signal.SIGKILL)
+    finally:
+        cmd.unregister()
 
 
 def test_closed_recording_replays(ros_master: RosMaster, rospy_node: Any, tmp_path: Path, capsys: Any) -> None:
