@@ -14,6 +14,12 @@ along a heading that follows the Markov chain ``theta' ~ N(theta, walk_angle_std
 ``min_walk_s`` it returns to the field as soon as its last step went down the potential (a positive component
 along the field where it arrived).
 
+Chassis guard: feedback linearisation drives the point ahead with the field, so the axle itself moves along the
+projection ``(v . h) h`` of the field ``v`` on its heading ``h`` and can close on an obstacle that ``v`` merely
+skirts (reversing past the cylinder, or one control period late on a stale pose). The forward speed is scaled
+down (to 0, a turn on the spot) until the axle, carried ``guard_horizon_s`` ahead at that speed, keeps out of the
+inner half of the safety margin or at least does not go deeper into it.
+
 Units: metres, seconds, radians.
 """
 
@@ -33,6 +39,7 @@ from mrs_nav.maps.obstacles import Obstacles
 from mrs_nav.robot import BURGER_MAX_ANGULAR, BURGER_MAX_LINEAR, BURGER_RADIUS
 
 WALK_REDRAWS = 20  # headings tried before giving up for this step
+GUARD_SCALES = np.array([1.0, 0.75, 0.5, 0.25])  # forward speeds tried by the chassis guard, then 0
 
 
 @dataclass(frozen=True)
@@ -56,6 +63,9 @@ class FieldFollowerConfig:
     min_walk_s: float = 2.0
     walk_angle_std: float = math.pi
     lookahead_m: float = 0.3
+    # The axle's motion is checked this far ahead: a few control periods, so a command applied one period late
+    # (a stale pose) is still covered.
+    guard_horizon_s: float = 0.3
     max_linear: float = BURGER_MAX_LINEAR
     max_angular: float = BURGER_MAX_ANGULAR
 
@@ -136,7 +146,19 @@ class FieldFollower:
                 velocity = self._walk(here, field, now)
         u, omega = feedback_linearized(pose, velocity, cfg.epsilon)
         u, omega = saturate(u, omega, cfg.max_linear, cfg.max_angular)
-        return FieldCommand(u, omega, False, 0.0, self.walking)
+        return FieldCommand(self._guarded(here, pose.yaw, u), omega, False, 0.0, self.walking)
+
+    def _guarded(self, here: FloatArray, yaw: float, u: float) -> float:
+        """The largest of the :data:`GUARD_SCALES` of ``u`` that keeps the axle out of the inner half of the safety
+        margin (or no deeper in it than now), else 0."""
+        if u == 0.0:
+            return u
+        travel = GUARD_SCALES * (u * self.config.guard_horizon_s)
+        points = np.vstack((here, here + travel[:, None] * np.array([math.cos(yaw), math.sin(yaw)])))
+        # the field's obstacles are grown by the radius and the whole margin: -margin/2 is its inner half
+        depth = self.field.obstacles.signed_distance(points)
+        ok = (depth[1:] >= -0.5 * self.config.safety_margin) | (depth[1:] >= depth[0])
+        return float(u * GUARD_SCALES[np.argmax(ok)]) if ok.any() else 0.0
 
     def _walk(self, here: FloatArray, field: FloatArray, now: float) -> FloatArray:
         cfg = self.config
