@@ -10,6 +10,11 @@ s, dated ``transform_tolerance`` s ahead as AMCL does (:mod:`mrs_nav.ros.map_odo
 ``global_localization`` (std_srvs/Empty) spreads the particles over the free space. Parameters take AMCL's
 names (config/localisation.yaml, the README).
 
+After a 2D Pose Estimate or ``global_localization`` the filter takes only scans stamped after it: the new cloud
+describes the robot as it is then, and a node behind on its scans (10 000 particles after a global spread) would
+otherwise weigh it against scans of where the robot was before (a kidnapped or teleported robot), which puts the
+particles on the wrong place before the first true scan arrives.
+
 A scan or pose that cannot be used is logged (throttled) and skipped; the node never dies of one.
 """
 
@@ -107,6 +112,7 @@ class LocalisationNode:
         self._mount: tuple[str, Pose2D] | None = None
         self._map_to_odom: Pose2D | None = None
         self._last_clock = -math.inf
+        self._reset_stamp = rospy.Time(0)  # scans stamped before the last reset of the belief are not used
         self._buffer = tf2_ros.Buffer(cache_time=rospy.Duration(30.0))
         self._listener = tf2_ros.TransformListener(self._buffer)
         self._map_odom = MapOdomBroadcaster(config.global_frame_id, config.odom_frame_id, config.transform_tolerance)
@@ -155,6 +161,9 @@ class LocalisationNode:
                 self._pending_pose = (pose, cov)
                 if self._filter is not None:
                     self._filter.set_pose(pose, cov)
+                    # rviz stamps the pose when it is given; an unstamped or future one counts from now
+                    now = rospy.Time.now()
+                    self._reset_stamp = min(msg.header.stamp, now) if not msg.header.stamp.is_zero() else now
         except MrsNavError as err:
             rospy.logwarn_throttle(5.0, f"localisation: ignoring initial pose: {err}")
             return
@@ -164,6 +173,7 @@ class LocalisationNode:
         with self._lock:
             if self._filter is not None:
                 self._filter.global_localisation()
+                self._reset_stamp = rospy.Time.now()
                 rospy.loginfo("localisation: particles spread over the free space")
             else:
                 rospy.logwarn("localisation: global_localization before any map; ignored")
@@ -175,6 +185,8 @@ class LocalisationNode:
             rospy.logwarn("localisation: time went back; clearing the tf buffer")
             self._buffer.clear()
             self._map_odom.reset()
+            with self._lock:
+                self._reset_stamp = rospy.Time(0)
         self._last_clock = now
         stamp = msg.header.stamp
         c = self.config
@@ -183,7 +195,7 @@ class LocalisationNode:
             scan = beam_scan(msg, self._mount_of(msg.header.frame_id, stamp))
             with self._lock:
                 pf = self._filter
-                if pf is None:
+                if pf is None or stamp < self._reset_stamp:
                     return
                 if not pf.update(odom, scan):
                     return
