@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import subprocess
 import sys
 import time
@@ -71,8 +72,9 @@ def _call(uri: str, method: str, *args: Any, timeout: float = 5.0) -> Any:
     return value
 
 
-def unconnected(master_uri: str, limit: int = 30) -> list[str]:
-    """Each ``topic: publisher -> subscriber`` the master lists whose connection the publisher does not have.
+def unconnected(master_uri: str) -> dict[str, list[tuple[str, str]]]:
+    """Per publishing node, each ``(topic, subscriber)`` the master lists whose connection the publisher does not
+    have; a node that does not answer maps to ``[("not answering", reason)]``.
 
     A publisher adds a subscriber's connection only after the handshake, so this names subscribers that never got
     a publisher's messages (a subscriber's own bus info lists a connection before it is made). For the message
@@ -83,17 +85,82 @@ def unconnected(master_uri: str, limit: int = 30) -> list[str]:
     for topic, nodes in publications:
         for node in nodes:
             topics_of.setdefault(node, []).append(topic)
-    lines: list[str] = []
+    gaps: dict[str, list[tuple[str, str]]] = {}
     for node, topics in sorted(topics_of.items()):
         try:
             bus = _call(_call(master_uri, "lookupNode", node), "getBusInfo")
         except (OSError, xmlrpc.client.Error) as err:
-            lines.append(f"{node}: not answering ({err})")
+            gaps[node] = [("not answering", str(err))]
             continue
         # outbound entries: (id, subscriber's caller id, "o", transport, topic, connected, ...)
         served = {(entry[4], entry[1]) for entry in bus if entry[2] == "o"}
-        lines += [f"{t}: {node} -> {s}" for t in topics for s in sorted(subscribers.get(t, ())) if (t, s) not in served]
-    return lines[:limit] + ([f"... and {len(lines) - limit} more"] if len(lines) > limit else [])
+        missing = [(t, s) for t in topics for s in sorted(subscribers.get(t, ())) if (t, s) not in served]
+        if missing:
+            gaps[node] = missing
+    return gaps
+
+
+# rospy's connection set-up: a thread with one of these among its innermost frames when a launch stalls is where it
+# waits (the TCPROS server reads each handshake in its accept thread, so one stuck peer holds up every later one)
+_HANDSHAKE_FRAMES = ("_tcp_server_callback", "add_connection", "read_ros_handshake_header", "connect (", "read_header")
+
+
+def handshake_stacks(master_uri: str, nodes: list[str]) -> list[str]:
+    """The threads of ``nodes`` (py-spy dumps with locals) that run, or wait in rospy's connection set-up, each
+    peer port in them named with the process that owns it."""
+    spy = Path(sys.executable).parent / "py-spy"
+    out: list[str] = []
+    for node in nodes:
+        try:
+            pid = _call(_call(master_uri, "lookupNode", node), "getPid")
+            dump = subprocess.run(
+                [str(spy), "dump", "--locals", "--pid", str(pid)],
+                check=False,
+                capture_output=True,
+                text=True,
+                timeout=30,
+            )
+        except (OSError, xmlrpc.client.Error, subprocess.TimeoutExpired) as err:
+            out.append(f"{node}: no stack ({err})")
+            continue
+        shown = []
+        for thread in dump.stdout.split("\nThread ")[1:]:
+            head, *lines = thread.splitlines()
+            frames = [f for f in lines if not f.startswith("        ")]  # frame lines; deeper ones are their locals
+            if "(active" in head or any(name in f for f in frames[:4] for name in _HANDSHAKE_FRAMES):
+                kept = "\n".join(_without_threading_frames(lines))
+                ports = sorted(set(re.findall(r'\("127\.0\.0\.1", (\d+)\)', thread)))
+                owners = "".join(f"\n    port {port}: {_owner(int(port))}" for port in ports)
+                shown.append(f"{node} (pid {pid}) thread {head}\n{kept}{owners}")
+        out += shown or [f"{node} (pid {pid}): nothing in connection set-up {dump.stderr.strip()}".rstrip()]
+    return out
+
+
+def _without_threading_frames(lines: list[str]) -> Iterator[str]:
+    """A py-spy thread's lines less the frames (and their locals) of threading.py's start-up."""
+    skipping = False
+    for line in lines:
+        if not line.startswith("        "):
+            skipping = "(threading.py:" in line
+        if not skipping:
+            yield line
+
+
+def _owner(port: int) -> str:
+    """The process (pid and command) with a loopback TCP socket on local ``port``, from /proc."""
+    inodes = set()
+    for table in ("/proc/net/tcp", "/proc/net/tcp6"):
+        with contextlib.suppress(OSError), open(table, encoding="ascii") as rows:
+            for row in list(rows)[1:]:
+                fields = row.split()
+                if int(fields[1].rsplit(":", 1)[1], 16) == port:
+                    inodes.add(f"socket:[{fields[9]}]")
+    for fd_dir in Path("/proc").glob("[0-9]*/fd"):
+        with contextlib.suppress(OSError):
+            if any(os.readlink(fd) in inodes for fd in fd_dir.iterdir()):
+                command = (fd_dir.parent / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+                return f"pid {fd_dir.parent.name}: {command[:200]}"
+    return "no process found"
 
 
 class RosMaster:
@@ -137,8 +204,13 @@ class RosMaster:
                 yield proc
             except AssertionError as err:
                 if str(err).startswith("timed out"):
-                    missing = "; ".join(unconnected(self.uri)) or "none"
-                    err.add_note(f"connections the master lists and the publisher lacks: {missing}")
+                    gaps = unconnected(self.uri)
+                    missing = "; ".join(f"{t}: {pub} -> {sub}" for pub, pairs in gaps.items() for t, sub in pairs)
+                    err.add_note(f"connections the master lists and the publisher lacks: {missing or 'none'}")
+                    # both ends of each missing connection: the stuck one may be either
+                    ends = set(gaps) | {sub for pairs in gaps.values() for t, sub in pairs if t != "not answering"}
+                    for stack in handshake_stacks(self.uri, sorted(ends)):
+                        err.add_note(stack)
                 raise
         # Keep the launch log next to the failure: pytest shows it with -rA on error.
         print(f"roslaunch log: {log}")
