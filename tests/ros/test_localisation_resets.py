@@ -1,5 +1,6 @@
 """The localisation node (navigation.launch sim:=false, office map) after a reset of its belief takes no scan
-stamped before the reset: the test is the clock, the odometry and the laser, so which scans exist is certain.
+stamped before the reset, and a scan in a frame tf lacks is skipped with a warning that names the frames tf has.
+The test is the clock, the odometry and the laser, so which scans exist is certain.
 
 A node behind on its scans still holds some from before a ``global_localization`` call or a 2D Pose Estimate;
 weighed against the new cloud they describe where the robot was (a teleported robot: the CI failures of the
@@ -76,15 +77,20 @@ def scan_at(pose: Pose2D, stamp: float) -> Any:
 @pytest.fixture(scope="module")
 def node(ros_master: RosMaster, rospy_node: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[Any]:
     from geometry_msgs.msg import PoseWithCovarianceStamped
+    from rosgraph_msgs.msg import Log
     from sensor_msgs.msg import LaserScan
 
     map_file = save_map(rasterize_world(load_world(WORLD), 0.05, 0.5), tmp_path_factory.mktemp("map") / "office.yaml")
     rospy = rospy_node
     robot = StillRobot(rospy, max(rospy.get_time(), 0.0) + 10.0)  # ahead of any clock an earlier module left
     estimates: list[float] = []
-    sub = rospy.Subscriber(
-        "/amcl_pose", PoseWithCovarianceStamped, lambda m: estimates.append(m.header.stamp.to_sec()), queue_size=10
-    )
+    logged: list[str] = []  # the node's log lines, from /rosout
+    subs = [
+        rospy.Subscriber(
+            "/amcl_pose", PoseWithCovarianceStamped, lambda m: estimates.append(m.header.stamp.to_sec()), queue_size=10
+        ),
+        rospy.Subscriber("/rosout", Log, lambda m: logged.append(m.msg) if m.name == "/amcl" else None, queue_size=100),
+    ]
     scans = rospy.Publisher("/scan", LaserScan, queue_size=10)
     poses = rospy.Publisher("/initialpose", PoseWithCovarianceStamped, queue_size=1)
     args = ["sim:=false", "rviz:=false", "navigation:=false", f"map_file:={map_file}", "x:=-5.0", "y:=-5.0"]
@@ -94,17 +100,18 @@ def node(ros_master: RosMaster, rospy_node: Any, tmp_path_factory: pytest.TempPa
             up = robot.now  # the node's tf listener has the odometry from here on
             wait_for(lambda: robot.now > up + 1.0, 30.0, "a second of the clock")
             wait_for(lambda: scans.get_num_connections() > 0 and poses.get_num_connections() > 0, 30.0, "subscribers")
-            yield rospy, robot, scans, poses, estimates
+            yield rospy, robot, scans, poses, estimates, logged
             assert proc.poll() is None, "a required node died"
     finally:
-        sub.unregister()
+        for sub in subs:
+            sub.unregister()
         scans.unregister()
         poses.unregister()
         robot.close()
 
 
 def _stale_scan_unused_then_fresh_used(node: Any, reset_at: float) -> None:
-    _, robot, scans, _, estimates = node
+    _, robot, scans, _, estimates, _ = node
     stale = reset_at - 0.5
     scans.publish(scan_at(ELSEWHERE, stale))  # taken before the reset, somewhere else
     fresh = robot.now
@@ -129,18 +136,24 @@ def test_a_scan_from_before_global_localization_is_not_used(node: Any) -> None:
 
 
 def test_a_scan_from_before_a_pose_estimate_is_not_used(node: Any) -> None:
-    rospy, robot, _, poses, _ = node
-    from rosgraph_msgs.msg import Log
-
-    logged: list[str] = []
-    log = rospy.Subscriber("/rosout", Log, lambda m: logged.append(m.msg) if m.name == "/amcl" else None)
-    try:
-        reset_at = robot.now
-        msg = initial_pose_msg(rospy, START, (0.01, 0.01, 0.01))
-        msg.header.stamp = rospy.Time.from_sec(reset_at)
-        poses.publish(msg)
-        # /initialpose and /scan are separate connections: the pose must be in before the stale scan is sent
-        wait_for(lambda: any(m.startswith("localisation: initial pose") for m in logged), 30.0, "the pose taken")
-    finally:
-        log.unregister()
+    rospy, robot, _, poses, _, logged = node
+    reset_at = robot.now
+    msg = initial_pose_msg(rospy, START, (0.01, 0.01, 0.01))
+    msg.header.stamp = rospy.Time.from_sec(reset_at)
+    poses.publish(msg)
+    # /initialpose and /scan are separate connections: the pose must be in before the stale scan is sent
+    wait_for(lambda: any(m.startswith("localisation: initial pose") for m in logged), 30.0, "the pose taken")
     _stale_scan_unused_then_fresh_used(node, reset_at)
+
+
+def test_a_scan_in_a_frame_tf_lacks_is_skipped_naming_the_frames_tf_has(node: Any) -> None:
+    _, robot, scans, _, estimates, logged = node
+    scan = scan_at(START, robot.now)
+    scan.header.frame_id = "laser"  # a typo for base_scan
+    scans.publish(scan)
+    wait_for(lambda: any("frames on tf:" in m for m in logged), 30.0, "the warning")
+    warning = next(m for m in logged if "frames on tf:" in m)
+    assert "skipping scan" in warning
+    for frame in ("base_footprint", "base_scan", "odom"):
+        assert frame in warning.rsplit("frames on tf:", 1)[1]
+    assert not _has(estimates, scan.header.stamp.to_sec())

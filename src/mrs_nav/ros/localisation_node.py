@@ -39,7 +39,7 @@ from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.localisation import BeamScan, LocalisationConfig, ParticleFilter, PoseEstimate
 from mrs_nav.ros.conversions import pose_from_msg, pose_msg
-from mrs_nav.ros.map_odom import MapOdomBroadcaster, lookup_pose
+from mrs_nav.ros.map_odom import MapOdomBroadcaster, known_frames, lookup_pose
 from mrs_nav.ros.navigation_conversions import grid_from_msg
 from mrs_nav.ros.params import private_param
 
@@ -206,7 +206,11 @@ class LocalisationNode:
             rospy.logwarn_throttle(5.0, f"localisation: skipping scan at {stamp.to_sec():.3f}: {err}")
             return
         except (tf2_ros.LookupException, tf2_ros.ConnectivityException, tf2_ros.ExtrapolationException) as err:
-            rospy.logwarn_throttle(5.0, f"localisation: skipping scan at {stamp.to_sec():.3f}, no transform: {err}")
+            rospy.logwarn_throttle(
+                5.0,
+                f"localisation: skipping scan at {stamp.to_sec():.3f}, no transform: {err} "
+                f"(frames on tf: {known_frames(self._buffer)})",
+            )
             return
         self._publish_estimate(estimate, particles, stamp)
 
