@@ -163,6 +163,17 @@ def _owner(port: int) -> str:
     return "no process found"
 
 
+def stall_report(master_uri: str, limit: int = 30) -> list[str]:
+    """Notes for a test that timed out inside a launch: the connections that never came up (at most ``limit``),
+    then the stacks of both ends of each (the stuck one may be either)."""
+    gaps = unconnected(master_uri)
+    missing = [f"{t}: {pub} -> {sub}" for pub, pairs in gaps.items() for t, sub in pairs]
+    listed = "; ".join(missing[:limit]) + (f"; ... and {len(missing) - limit} more" if len(missing) > limit else "")
+    ends = set(gaps) | {sub for pairs in gaps.values() for t, sub in pairs if t != "not answering"}
+    stacks = handshake_stacks(master_uri, sorted(ends))
+    return [f"connections the master lists and the publisher lacks: {listed or 'none'}", *stacks]
+
+
 class RosMaster:
     """A roscore on a free loopback port, with its logs under ``log_dir``."""
 
@@ -204,13 +215,8 @@ class RosMaster:
                 yield proc
             except AssertionError as err:
                 if str(err).startswith("timed out"):
-                    gaps = unconnected(self.uri)
-                    missing = "; ".join(f"{t}: {pub} -> {sub}" for pub, pairs in gaps.items() for t, sub in pairs)
-                    err.add_note(f"connections the master lists and the publisher lacks: {missing or 'none'}")
-                    # both ends of each missing connection: the stuck one may be either
-                    ends = set(gaps) | {sub for pairs in gaps.values() for t, sub in pairs if t != "not answering"}
-                    for stack in handshake_stacks(self.uri, sorted(ends)):
-                        err.add_note(stack)
+                    for note in stall_report(self.uri):
+                        err.add_note(note)
                 raise
         # Keep the launch log next to the failure: pytest shows it with -rA on error.
         print(f"roslaunch log: {log}")
