@@ -12,6 +12,9 @@ from mrs_nav.geometry import Pose2D, wrap_angle
 from mrs_nav.sim.scripted_drive import OFFICE_CORRIDOR_LOOP, WaypointDriver
 from tests.rosharness import wait_for
 
+COMMAND_PERIOD = 0.1  # s of sim time between commands, the simulator's lockstep period
+_SLACK = 1e-6  # s
+
 
 class Drive:
     """Drives ``waypoints`` (by default the office's corridor loop) from /ground_truth/odom, a command every
@@ -48,9 +51,12 @@ class Drive:
         with self.lock:
             self.truth[round(stamp.to_sec() * 100)] = pose
             self.now = stamp.to_sec()
-            due = self.on and self.now >= self.next_command
+            # A stamp rounds to the nanosecond and now + 0.1 to the float: without the slack the command due at
+            # t + 0.1 can wait for the next ground truth, past the lockstep horizon, and the simulator then waits a
+            # whole lockstep_timeout of wall time for it (the loop ran at half real time instead of 3x).
+            due = self.on and self.now >= self.next_command - _SLACK
             if due:
-                self.next_command = self.now + 0.1
+                self.next_command = self.now + COMMAND_PERIOD
         if due:
             command = self.driver.command(pose)
             twist = self.Twist()
