@@ -8,9 +8,11 @@ global-localisation test followed a first attempt whose 10 000 particles had lef
 
 from __future__ import annotations
 
+import functools
 import math
 import threading
 from collections.abc import Iterator
+from dataclasses import dataclass
 from typing import Any
 
 import pytest
@@ -18,7 +20,7 @@ import pytest
 from mrs_nav.geometry import Pose2D
 from mrs_nav.maps.map_io import save_map
 from mrs_nav.maps.rasterize import rasterize_world
-from mrs_nav.maps.world import load_world
+from mrs_nav.maps.world import World, load_world
 from mrs_nav.sim import Simulator, SimulatorConfig
 from tests.ros.test_localisation_node import initial_pose_msg
 from tests.rosharness import REPO, RosMaster, wait_for
@@ -62,11 +64,16 @@ class StillRobot:
         self._tf.unregister()
 
 
+@functools.cache
+def office() -> World:
+    return load_world(WORLD)
+
+
 def scan_at(pose: Pose2D, stamp: float) -> Any:
     """The simulated laser's scan of the office from ``pose``, stamped ``stamp``."""
     from mrs_nav.ros.conversions import laser_scan_msg, to_ros_time
 
-    sim = Simulator(load_world(WORLD), SimulatorConfig(seed=0), pose)
+    sim = Simulator(office(), SimulatorConfig(seed=0), pose)
     sim.run(0.5)
     assert sim.last_scan is not None
     msg = laser_scan_msg(sim.last_scan, "base_scan")
@@ -74,13 +81,26 @@ def scan_at(pose: Pose2D, stamp: float) -> Any:
     return msg
 
 
+@dataclass(frozen=True)
+class NodeUnderTest:
+    """The test's side of the launch: its clock and odometry, its /scan and /initialpose publishers, and what
+    the node said (the stamps of its /amcl_pose messages, its /rosout lines)."""
+
+    rospy: Any
+    robot: StillRobot
+    scans: Any
+    poses: Any
+    estimates: list[float]
+    logged: list[str]
+
+
 @pytest.fixture(scope="module")
-def node(ros_master: RosMaster, rospy_node: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[Any]:
+def node(ros_master: RosMaster, rospy_node: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[NodeUnderTest]:
     from geometry_msgs.msg import PoseWithCovarianceStamped
     from rosgraph_msgs.msg import Log
     from sensor_msgs.msg import LaserScan
 
-    map_file = save_map(rasterize_world(load_world(WORLD), 0.05, 0.5), tmp_path_factory.mktemp("map") / "office.yaml")
+    map_file = save_map(rasterize_world(office(), 0.05, 0.5), tmp_path_factory.mktemp("map") / "office.yaml")
     rospy = rospy_node
     robot = StillRobot(rospy, max(rospy.get_time(), 0.0) + 10.0)  # ahead of any clock an earlier module left
     estimates: list[float] = []
@@ -100,7 +120,7 @@ def node(ros_master: RosMaster, rospy_node: Any, tmp_path_factory: pytest.TempPa
             up = robot.now  # the node's tf listener has the odometry from here on
             wait_for(lambda: robot.now > up + 1.0, 30.0, "a second of the clock")
             wait_for(lambda: scans.get_num_connections() > 0 and poses.get_num_connections() > 0, 30.0, "subscribers")
-            yield rospy, robot, scans, poses, estimates, logged
+            yield NodeUnderTest(rospy, robot, scans, poses, estimates, logged)
             assert proc.poll() is None, "a required node died"
     finally:
         for sub in subs:
@@ -110,12 +130,12 @@ def node(ros_master: RosMaster, rospy_node: Any, tmp_path_factory: pytest.TempPa
         robot.close()
 
 
-def _stale_scan_unused_then_fresh_used(node: Any, reset_at: float) -> None:
-    _, robot, scans, _, estimates, _ = node
+def _stale_scan_unused_then_fresh_used(node: NodeUnderTest, reset_at: float) -> None:
+    estimates = node.estimates
     stale = reset_at - 0.5
-    scans.publish(scan_at(ELSEWHERE, stale))  # taken before the reset, somewhere else
-    fresh = robot.now
-    scans.publish(scan_at(START, fresh))
+    node.scans.publish(scan_at(ELSEWHERE, stale))  # taken before the reset, somewhere else
+    fresh = node.robot.now
+    node.scans.publish(scan_at(START, fresh))
     # the first scan after a reset updates the filter whether or not the robot moved: one of the two makes one
     wait_for(lambda: _has(estimates, fresh) or _has(estimates, stale), 30.0, "an /amcl_pose after the reset")
     assert not _has(estimates, stale), "the scan stamped before the reset was used"
@@ -126,34 +146,31 @@ def _has(stamps: list[float], stamp: float) -> bool:
     return any(abs(s - stamp) < 1e-6 for s in stamps)
 
 
-def test_a_scan_from_before_global_localization_is_not_used(node: Any) -> None:
-    rospy, robot, *_ = node
+def test_a_scan_from_before_global_localization_is_not_used(node: NodeUnderTest) -> None:
     from std_srvs.srv import Empty
 
-    reset_at = robot.now
-    rospy.ServiceProxy("/global_localization", Empty)()
+    reset_at = node.robot.now
+    node.rospy.ServiceProxy("/global_localization", Empty)()
     _stale_scan_unused_then_fresh_used(node, reset_at)
 
 
-def test_a_scan_from_before_a_pose_estimate_is_not_used(node: Any) -> None:
-    rospy, robot, _, poses, _, logged = node
-    reset_at = robot.now
-    msg = initial_pose_msg(rospy, START, (0.01, 0.01, 0.01))
-    msg.header.stamp = rospy.Time.from_sec(reset_at)
-    poses.publish(msg)
+def test_a_scan_from_before_a_pose_estimate_is_not_used(node: NodeUnderTest) -> None:
+    reset_at = node.robot.now
+    msg = initial_pose_msg(node.rospy, START, (0.01, 0.01, 0.01))
+    msg.header.stamp = node.rospy.Time.from_sec(reset_at)
+    node.poses.publish(msg)
     # /initialpose and /scan are separate connections: the pose must be in before the stale scan is sent
-    wait_for(lambda: any(m.startswith("localisation: initial pose") for m in logged), 30.0, "the pose taken")
+    wait_for(lambda: any(m.startswith("localisation: initial pose") for m in node.logged), 30.0, "the pose taken")
     _stale_scan_unused_then_fresh_used(node, reset_at)
 
 
-def test_a_scan_in_a_frame_tf_lacks_is_skipped_naming_the_frames_tf_has(node: Any) -> None:
-    _, robot, scans, _, estimates, logged = node
-    scan = scan_at(START, robot.now)
+def test_a_scan_in_a_frame_tf_lacks_is_skipped_naming_the_frames_tf_has(node: NodeUnderTest) -> None:
+    scan = scan_at(START, node.robot.now)
     scan.header.frame_id = "laser"  # a typo for base_scan
-    scans.publish(scan)
-    wait_for(lambda: any("frames on tf:" in m for m in logged), 30.0, "the warning")
-    warning = next(m for m in logged if "frames on tf:" in m)
+    node.scans.publish(scan)
+    wait_for(lambda: any("frames on tf:" in m for m in node.logged), 30.0, "the warning")
+    warning = next(m for m in node.logged if "frames on tf:" in m)
     assert "skipping scan" in warning
     for frame in ("base_footprint", "base_scan", "odom"):
         assert frame in warning.rsplit("frames on tf:", 1)[1]
-    assert not _has(estimates, scan.header.stamp.to_sec())
+    assert not _has(node.estimates, scan.header.stamp.to_sec())
