@@ -128,6 +128,7 @@ def run(args: argparse.Namespace) -> int:
         "wall_time_s": round(result.wall_time_s, 3),
         "ate_rmse_m": result.ate_rmse_m,
         "map_iou": result.map_iou,
+        "map_iou_1cell": result.map_iou_1cell,
         "bag": str(bag_path) if bag_path else None,
         "map": str(map_yaml),
         "png": str(png),
@@ -145,7 +146,8 @@ def run(args: argparse.Namespace) -> int:
             )
         print(
             f"{result.goals_reached}/{len(goals)} goals, {result.collisions} contacts, {result.sim_time_s:.1f} s sim "
-            f"in {result.wall_time_s:.1f} s, ATE {result.ate_rmse_m:.3f} m, map IoU {result.map_iou:.2f}"
+            f"in {result.wall_time_s:.1f} s, ATE {result.ate_rmse_m:.3f} m, map IoU {result.map_iou:.2f} "
+            f"({result.map_iou_1cell:.2f} within one cell)"
         )
         print(f"wrote {png}, {map_yaml}" + (f", {bag_path}" if bag_path else ""))
     return 0 if result.success else 2

@@ -136,7 +136,8 @@ class DemoResult:
     sim_time_s: float
     wall_time_s: float
     ate_rmse_m: float
-    map_iou: float
+    map_iou: float  # occupied cells of the map and of the world over the observed cells, cell for cell
+    map_iou_1cell: float  # the same within one cell: hits on a wall face that lies on a cell boundary fill both cells
     grid: OccupancyGrid
     truth: FloatArray  # (N, 3) ground-truth poses at the control rate (evenly thinned past 20,000)
     estimate: FloatArray  # (N, 3) SLAM poses at the same times
@@ -218,6 +219,7 @@ class Demo:
             wall_time_s=time.perf_counter() - wall0,
             ate_rmse_m=math.sqrt(self._squared_error / self._ticks) if self._ticks else math.nan,
             map_iou=map_iou(self.slam.grid, self.world),
+            map_iou_1cell=map_iou(self.slam.grid, self.world, tolerance=1),
             grid=grid,
             truth=poses[:, :3],
             estimate=poses[:, 3:],
