@@ -199,9 +199,9 @@ def _teleport(rospy: Any, drive: Drive, pose: Pose2D) -> None:
 
 
 # In the bench (bench/RESULTS.md) global localisation in the office converges in 9 of 10 seeds and a kidnapped
-# robot is found again in 3 of 4: the office is nearly symmetric under half and quarter turns. Each test gives
-# the filter up to three tries from the same start before it fails (all three miss about 1 run in 64 for the
-# kidnapping): a failure then means a broken node, not unlucky draws.
+# robot is found again in 11 of 12: the office is nearly symmetric under half and quarter turns. Each test gives
+# the filter up to three tries from the same start before it fails (at those rates all three miss about 1 run in
+# 1000): a failure then means a broken node, not unlucky draws.
 ATTEMPTS = 3
 KIDNAP_TO = Pose2D(5.0, 0.0, math.pi / 2.0)  # from the south-west corner to the east corridor, as the bench
 

@@ -24,7 +24,7 @@ from mrs_nav.geometry import Pose2D
 from mrs_nav.localisation import LocalisationConfig
 from mrs_nav.localisation.sim_drive import Kidnap, LocalisationRun, drive_and_localise
 from mrs_nav.maps.rasterize import rasterize_world
-from mrs_nav.maps.world import World, load_world
+from mrs_nav.maps.world import load_world
 from mrs_nav.options import runs_option
 from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.sim.scripted_drive import OFFICE_CORRIDOR_LOOP
@@ -36,11 +36,15 @@ OFF_COVARIANCE = (0.25, 0.25, (math.pi / 12.0) ** 2)
 # drive(config, seed, duration, **drive_and_localise keywords)
 Drive = Callable[..., LocalisationRun]
 KIDNAP = Kidnap(20.0, Pose2D(5.0, 0.0, math.pi / 2.0))
+KIDNAP_WINDOW = 100.0  # s of driving after the kidnapping
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--seeds", type=runs_option, default=10, help="seeds of the global localisation runs (default: 10)"
+    )
+    parser.add_argument(
+        "--kidnap-seeds", type=runs_option, default=12, help="seeds of the kidnapping runs, from 1 (default: 12)"
     )
 
 
@@ -65,7 +69,7 @@ def run(args: argparse.Namespace) -> str:
             **kwargs,
         )
 
-    return _fixed_counts(drive, base) + "\n" + _defaults(drive, base, world, args.seeds)
+    return _fixed_counts(drive, base) + "\n" + _defaults(drive, base, args.seeds, args.kidnap_seeds)
 
 
 def _fixed_counts(drive: Drive, base: LocalisationConfig) -> str:
@@ -100,14 +104,16 @@ def _fixed_counts(drive: Drive, base: LocalisationConfig) -> str:
     )
 
 
-def _defaults(drive: Drive, base: LocalisationConfig, world: World, seeds: int) -> str:
+def _defaults(drive: Drive, base: LocalisationConfig, seeds: int, kidnap_seeds: int) -> str:
     tracking = [drive(base, s, 120.0, initial=START, initial_covariance=(0.0025, 0.0025, 0.0003)) for s in (1, 2, 3)]
     rms = [t.rms() for t in tracking]
     global_times = [drive(base, s, 65.0, initial=None).converged_at() for s in range(seeds)]
     global_ok = sum(t is not None and t <= 60.0 for t in global_times)
+    # Driven on for KIDNAP_WINDOW after the kidnapping, past the 60 s target, so that a late recovery shows its
+    # time rather than "not within the run".
     kidnaps = []
-    for s in (1, 2, 3, 4):
-        at = drive(base, s, 85.0, initial=START, kidnap=KIDNAP).converged_at(KIDNAP.at)
+    for s in range(1, kidnap_seeds + 1):
+        at = drive(base, s, KIDNAP.at + KIDNAP_WINDOW, initial=START, kidnap=KIDNAP).converged_at(KIDNAP.at)
         kidnaps.append(None if at is None else at - KIDNAP.at)
     kidnap_ok = sum(k is not None and k <= 60.0 for k in kidnaps)
     cpu = 1000.0 * np.concatenate([t.cpu_s for t in tracking])
@@ -121,9 +127,10 @@ def _defaults(drive: Drive, base: LocalisationConfig, world: World, seeds: int) 
         + f"- global localisation (no initial pose), seeds 0-{seeds - 1}: converged after "
         + f"{', '.join(_fmt(t) for t in global_times)} s; {global_ok}/{seeds} within 60 s, target >= 9/10: "
         + f"{'PASS' if global_ok >= math.ceil(0.9 * seeds) else 'FAIL'}\n"
-        + "- kidnapped at 20 s to (5, 0, 90 deg), seeds 1-4: found again after "
-        + f"{', '.join(_fmt(k) for k in kidnaps)} s; {kidnap_ok}/4 within 60 s "
-        + f"({'PASS' if kidnap_ok == 4 else 'FAIL'}: the office is nearly symmetric under half and quarter turns)\n"
-        + f"- other developers' jobs were running (load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores at "
-        + "the end of the run): CPU figures are process time, not wall time\n"
+        + f"- kidnapped at 20 s to (5, 0, 90 deg), seeds 1-{kidnap_seeds}, driven on for {KIDNAP_WINDOW:.0f} s: "
+        + f"found again after {', '.join(_fmt(k) for k in kidnaps)} s; {kidnap_ok}/{kidnap_seeds} within 60 s "
+        + f"({'PASS' if kidnap_ok == kidnap_seeds else 'FAIL'}: the office is nearly symmetric under half and "
+        + "quarter turns)\n"
+        + f"- load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores at the end of the run; CPU figures are "
+        + "process time, not wall time, so other jobs on the machine do not inflate them\n"
     )
