@@ -19,6 +19,7 @@ RANKS: dict[str, int] = {
     "robot": 1,
     "resources": 1,
     "limits": 1,
+    "textfiles": 1,
     "jit": 1,
     "planning": 2,
     "motion_model": 2,

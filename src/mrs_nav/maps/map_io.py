@@ -13,24 +13,21 @@ from __future__ import annotations
 
 import math
 import re
-import stat
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-import yaml
 
 from mrs_nav.errors import InvalidInputError, MapFileError
 from mrs_nav.limits import MAX_IMAGE_BYTES, check_grid_cells
 from mrs_nav.maps.occupancy_grid import FREE_MAX, OCCUPIED, OCCUPIED_MIN, UNKNOWN, OccupancyGrid
+from mrs_nav.textfiles import load_yaml, read_regular, read_text
 
 _SAVE_FREE, _SAVE_OCCUPIED, _SAVE_UNKNOWN = 254, 0, 205
 _MODES = ("trinary", "scale", "raw")
 # A map description holds a handful of keys; anything this large is not one.
 _MAX_YAML_BYTES = 1 << 20
-# A YAML 1.2 float that YAML 1.1 (PyYAML) leaves as a string, e.g. 5e-2 or 1E3.
-_YAML12_FLOAT = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 
 
 def _number(meta: dict[str, Any], key: str, where: Path, default: float | None = None) -> float:
@@ -39,28 +36,9 @@ def _number(meta: dict[str, Any], key: str, where: Path, default: float | None =
             raise MapFileError(f"{where}: missing key {key!r}")
         return default
     value = meta[key]
-    if isinstance(value, str) and _YAML12_FLOAT.fullmatch(value.strip()):
-        value = float(value)  # YAML 1.1 reads 5e-2 (no dot) as text; map_server's YAML 1.2 reader takes it
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
         raise MapFileError(f"{where}: {key} must be a finite number, got {value!r}")
     return float(value)
-
-
-def _read_regular(path: Path, limit: int, what: str) -> bytes:
-    """The bytes of ``path`` when it is a regular file of at most ``limit`` bytes.
-
-    A device (``/dev/zero``, ``/dev/urandom``) or a FIFO would otherwise be read without end.
-    """
-    try:
-        info = path.stat()
-        if not stat.S_ISREG(info.st_mode):
-            raise MapFileError(f"{path}: cannot read {what}: not a regular file")
-        if info.st_size > limit:
-            raise MapFileError(f"{path}: {what} is {info.st_size} bytes, above the limit of {limit}")
-        with path.open("rb") as f:
-            return f.read(limit + 1)
-    except OSError as err:
-        raise MapFileError(f"{path}: cannot read {what}: {err.strerror or err}") from err
 
 
 def read_pgm(path: Path) -> npt.NDArray[np.int32]:
@@ -68,7 +46,7 @@ def read_pgm(path: Path) -> npt.NDArray[np.int32]:
 
     The array is scaled to 0..255 when maxval differs from 255.
     """
-    data = _read_regular(path, MAX_IMAGE_BYTES, "map image")
+    data = read_regular(path, MAX_IMAGE_BYTES, "map image", MapFileError)
     # Header: magic, width, height, maxval, separated by whitespace, with # comments; one whitespace byte ends it.
     # At most 9 digits per number: Python refuses to convert thousands of digits, and no valid size needs more.
     header = re.match(
@@ -107,16 +85,7 @@ def read_pgm(path: Path) -> npt.NDArray[np.int32]:
 
 
 def _parse_yaml(path: Path) -> dict[str, Any]:
-    try:
-        text = _read_regular(path, _MAX_YAML_BYTES, "map description").decode("utf-8")
-    except UnicodeDecodeError as err:
-        raise MapFileError(f"{path}: cannot read map description: {err}") from err
-    try:
-        meta = yaml.safe_load(text)
-    except yaml.YAMLError as err:
-        raise MapFileError(f"{path}: malformed YAML: {' '.join(str(err).split())}") from err
-    except RecursionError:
-        raise MapFileError(f"{path}: malformed YAML: nested too deeply") from None
+    meta = load_yaml(read_text(path, _MAX_YAML_BYTES, "map description", MapFileError), str(path), MapFileError)
     if not isinstance(meta, dict):
         raise MapFileError(f"{path}: expected a YAML mapping with image, resolution and origin")
     return meta

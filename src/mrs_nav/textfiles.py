@@ -1,0 +1,66 @@
+"""Reading the files users hand over by name: regular files only, bounded in size, text as UTF-8, YAML with
+YAML 1.2's numbers.
+
+A path to a device (``/dev/zero``), a FIFO or a huge file would otherwise be read without end or block in
+``open``; each reader here refuses it with one line naming the file, before reading. PyYAML implements YAML 1.1,
+which reads ``1e-05`` or ``5e-2`` (an exponent without a dot) as text; ROS 1 tools (map_server's yaml-cpp,
+rosparam) and Python's own ``repr`` produce and accept such numbers, so :func:`load_yaml` reads them as floats.
+"""
+
+from __future__ import annotations
+
+import re
+import stat
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from mrs_nav.errors import InvalidInputError, MrsNavError
+
+
+class _Yaml12Loader(yaml.SafeLoader):  # type: ignore[misc]  # PyYAML ships no stubs here
+    """PyYAML's safe loader with YAML 1.2's float forms: digits with an exponent and no dot."""
+
+
+_Yaml12Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
+    list("-+0123456789."),
+)
+
+
+def read_regular(path: Path, limit: int, what: str, error: type[MrsNavError] = InvalidInputError) -> bytes:
+    """The bytes of ``path`` when it is a regular file of at most ``limit`` bytes; otherwise ``error`` with one
+    line naming ``path`` and ``what`` it was read as."""
+    try:
+        info = path.stat()
+        if not stat.S_ISREG(info.st_mode):
+            raise error(f"{path}: cannot read {what}: not a regular file")
+        if info.st_size > limit:
+            raise error(f"{path}: {what} is {info.st_size} bytes, above the limit of {limit}")
+        with path.open("rb") as f:
+            data = f.read(limit + 1)
+    except OSError as err:
+        raise error(f"{path}: cannot read {what}: {err.strerror or err}") from err
+    if len(data) > limit:  # it grew after the stat
+        raise error(f"{path}: {what} is above the limit of {limit} bytes")
+    return data
+
+
+def read_text(path: Path, limit: int, what: str, error: type[MrsNavError] = InvalidInputError) -> str:
+    """:func:`read_regular` decoded as UTF-8."""
+    try:
+        return read_regular(path, limit, what, error).decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise error(f"{path}: cannot read {what}: not UTF-8 text (byte {err.start})") from None
+
+
+def load_yaml(text: str, where: str, error: type[MrsNavError] = InvalidInputError) -> Any:
+    """``text`` parsed as YAML (safe types, YAML 1.2 floats); ``error`` names ``where`` on malformed input."""
+    try:
+        return yaml.load(text, Loader=_Yaml12Loader)  # a SafeLoader subclass: safe types only
+    except yaml.YAMLError as err:
+        raise error(f"{where}: malformed YAML: {' '.join(str(err).split())}") from None
+    except RecursionError:
+        raise error(f"{where}: malformed YAML: nested too deeply") from None
