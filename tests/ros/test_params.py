@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import math
+import subprocess
 
 import pytest
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.ros.params import _convert
+from tests.rosharness import RosMaster
 
 
 def test_numbers_come_as_the_defaults_type() -> None:
@@ -51,3 +53,28 @@ def test_rrt_navigation_max_iterations_caps_a_plan_and_a_cap_below_one_is_refuse
     assert result.iterations == 40  # the cap, long before the 5 s budget
     with pytest.raises(InvalidInputError, match=r"~max_iterations: must be >= 1 \(0 = no cap\), got -3"):
         RrtNavigationConfig(max_iterations=-3)
+
+
+@pytest.mark.parametrize(
+    ("argument", "message"),
+    [
+        ("_seed:=4000000000", "ERROR: ~seed: 4000000000 is outside the integers ROS parameters can hold"),
+        ("_seed:=-3000000000", "ERROR: ~seed: -3000000000 is outside the integers ROS parameters can hold"),
+        ("_seed:=[1,", "ERROR: _seed:=[1,: invalid command-line parameters: while parsing a flow node"),
+    ],
+)
+def test_a_command_line_parameter_the_parameter_server_cannot_hold_is_one_line(
+    ros_master: RosMaster, argument: str, message: str
+) -> None:
+    # rospy raised OverflowError (XML-RPC's 32-bit integers) or ROSInitException from inside init_node
+    done = subprocess.run(
+        ["rosrun", "mrs_nav", "simulator", "_world:=simple", argument],
+        env=ros_master.env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert done.returncode == 1
+    assert done.stderr.strip().splitlines() == [done.stderr.strip()]
+    assert done.stderr.startswith(message)
