@@ -28,6 +28,11 @@ from mrs_nav.geometry import Pose2D, wrap_angle
 DEFAULT_ALPHAS = (0.005, 0.002, 0.01, 0.0005)
 
 
+# An alpha of 100 is a standard deviation ten times the motion itself: no odometry is that bad, and larger ones
+# overflow the sampled poses to infinity.
+MAX_ALPHA = 100.0
+
+
 @dataclass(frozen=True)
 class OdometryNoise:
     """Alphas ``a1..a4`` of the odometry motion model (variances per squared motion, see module doc)."""
@@ -39,8 +44,8 @@ class OdometryNoise:
 
     def __post_init__(self) -> None:
         values = (self.a1, self.a2, self.a3, self.a4)
-        if not all(math.isfinite(a) and a >= 0.0 for a in values):
-            raise InvalidInputError(f"odometry noise alphas must be finite and >= 0, got {values}")
+        if not all(math.isfinite(a) and 0.0 <= a <= MAX_ALPHA for a in values):
+            raise InvalidInputError(f"odometry noise alphas must be in 0..{MAX_ALPHA:g}, got {values}")
 
     @classmethod
     def of(cls, alphas: Sequence[float]) -> OdometryNoise:

@@ -5,14 +5,17 @@ A path to a device (``/dev/zero``), a FIFO or a huge file would otherwise be rea
 ``open``; each reader here refuses it with one line naming the file, before reading. PyYAML implements YAML 1.1,
 which reads ``1e-05`` or ``5e-2`` (an exponent without a dot) as text; ROS 1 tools (map_server's yaml-cpp,
 rosparam) and Python's own ``repr`` produce and accept such numbers, so :func:`load_yaml` reads them as floats.
+Logs too large to hold are streamed instead: :func:`check_regular` before opening them, and
+:func:`bounded_lines` so that a file without line breaks is not read into one endless line.
 """
 
 from __future__ import annotations
 
 import re
 import stat
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import yaml
 
@@ -30,15 +33,41 @@ _Yaml12Loader.add_implicit_resolver(
 )
 
 
+# A description written by hand or by a tool (world, map, obstacles, config, golden file) is kilobytes.
+DESCRIPTION_LIMIT = 16 << 20
+
+
+def check_regular(path: Path, what: str, error: type[MrsNavError] = InvalidInputError) -> int:
+    """The size of ``path`` when it is a regular file; otherwise ``error`` naming ``path`` and ``what``."""
+    try:
+        info = path.stat()
+    except OSError as err:
+        raise error(f"{path}: cannot read {what}: {err.strerror or err}") from err
+    if not stat.S_ISREG(info.st_mode):
+        raise error(f"{path}: cannot read {what}: not a regular file")
+    return info.st_size
+
+
+def bounded_lines(
+    handle: IO[str], limit: int, where: str, error: type[MrsNavError] = InvalidInputError
+) -> Iterator[str]:
+    """The lines of ``handle``, each at most ``limit`` characters with its line break; a longer one raises
+    ``error`` naming ``where:number`` before more of it is read."""
+    number = 0
+    while line := handle.readline(limit + 1):
+        number += 1
+        if len(line) > limit:
+            raise error(f"{where}:{number}: line longer than {limit} characters")
+        yield line
+
+
 def read_regular(path: Path, limit: int, what: str, error: type[MrsNavError] = InvalidInputError) -> bytes:
     """The bytes of ``path`` when it is a regular file of at most ``limit`` bytes; otherwise ``error`` with one
     line naming ``path`` and ``what`` it was read as."""
+    size = check_regular(path, what, error)
+    if size > limit:
+        raise error(f"{path}: {what} is {size} bytes, above the limit of {limit}")
     try:
-        info = path.stat()
-        if not stat.S_ISREG(info.st_mode):
-            raise error(f"{path}: cannot read {what}: not a regular file")
-        if info.st_size > limit:
-            raise error(f"{path}: {what} is {info.st_size} bytes, above the limit of {limit}")
         with path.open("rb") as f:
             data = f.read(limit + 1)
     except OSError as err:

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from mrs_nav.errors import InvalidInputError, MapFileError
-from mrs_nav.textfiles import load_yaml, read_regular, read_text
+from mrs_nav.textfiles import bounded_lines, check_regular, load_yaml, read_regular, read_text
 
 
 def test_a_device_is_refused_before_it_is_read() -> None:
@@ -48,3 +48,15 @@ def test_malformed_yaml_names_the_file() -> None:
         load_yaml("a: [1, 2", "m.yaml")
     with pytest.raises(InvalidInputError, match="nested too deeply"):
         load_yaml("[" * 100_000, "m.yaml")
+
+
+def test_a_line_past_the_limit_is_refused_before_the_rest_is_read(tmp_path: Path) -> None:
+    log = tmp_path / "log"
+    log.write_text("short\n" + "x" * 10_000)
+    with log.open() as handle:
+        lines = bounded_lines(handle, 100, str(log))
+        assert next(lines) == "short\n"
+        with pytest.raises(InvalidInputError, match=r"log:2: line longer than 100 characters$"):
+            next(lines)
+        assert handle.tell() <= len("short\n") + 101
+    assert check_regular(log, "log") == 10_006

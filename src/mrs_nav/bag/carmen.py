@@ -36,11 +36,13 @@ import numpy as np
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D
+from mrs_nav.textfiles import bounded_lines, check_regular
 
 MAX_BEAMS = 10_000  # beams per scan; the densest 2-D lasers give a few thousand
 MAX_RANGE_M = 1_000.0  # m; no 2-D laser in these logs reaches a kilometre
 MAX_COORDINATE_M = 100_000.0  # m; a pose farther out than 100 km is not a building
 MAX_STAMP_S = 2.0**32  # s; ROS 1 time is an unsigned 32-bit second count
+MAX_LINE_CHARS = 64 * MAX_BEAMS  # a line of the longest scan's numbers, remissions and all, written out in full
 ANCHOR_TOLERANCE = 1e-4  # m and rad: an ODOM line this close to a scan's pose re-anchors the stream
 
 
@@ -150,9 +152,10 @@ def parse_odom(line: str, where: str = "line", number: int = 0) -> CarmenOdom:
 def read_records(path: Path) -> Iterator[CarmenScan | CarmenOdom]:
     """Yield the FLASER and ODOM records of a CARMEN log in file order."""
     opener = gzip.open if path.suffix == ".gz" else open
+    check_regular(path, "CARMEN log")
     try:
         with opener(path, "rt", encoding="utf-8", errors="replace") as handle:
-            for number, line in enumerate(handle, start=1):
+            for number, line in enumerate(bounded_lines(handle, MAX_LINE_CHARS, str(path)), start=1):
                 # The type is the first word: "FLASERX" or "ODOMETRY" are other messages, skipped.
                 kind = line.split(maxsplit=1)[0] if line.strip() else ""
                 if kind == "FLASER":

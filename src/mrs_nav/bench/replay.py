@@ -10,7 +10,6 @@ a terminal.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import tempfile
 from pathlib import Path
@@ -22,6 +21,7 @@ from mrs_nav.bag.from_carmen import carmen_to_bag
 from mrs_nav.bench.slam import DEFAULT_LOG, INTEL_CONFIG
 from mrs_nav.motion_model import DEFAULT_ALPHAS, OdometryNoise
 from mrs_nav.options import runs_option
+from mrs_nav.replay.golden import read_golden
 from mrs_nav.replay.slam_replay import SlamReplay, replay_slam
 from mrs_nav.resources import CHECKOUT
 from mrs_nav.slam.config import SlamConfig
@@ -69,7 +69,7 @@ def golden_config(bag: Path) -> SlamConfig:
     golden = bag.with_name(f"{bag.stem}.golden.json")
     if not golden.is_file():
         return SlamConfig()
-    options = json.loads(golden.read_text(encoding="utf-8")).get("options", [])
+    options = read_golden(golden)["options"]
     return SlamConfig.from_assignments([o.removeprefix("--param=") for o in options if o.startswith("--param=")])
 
 

@@ -65,7 +65,11 @@ def register(subparsers: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    noise = OdometryNoise.of(parse_floats(args.odom_noise, 4, "--odom-noise"))
+    alphas = parse_floats(args.odom_noise, 4, "--odom-noise")
+    try:
+        noise = OdometryNoise.of(alphas)
+    except InvalidInputError as err:
+        raise InvalidInputError(f"--odom-noise: {err}") from None
     if args.odom == "log" and args.odom_noise != _DEFAULT_NOISE:
         raise InvalidInputError("--odom-noise applies to --odom synthetic only")
     linear, angular = parse_floats(args.odom_scale, 2, "--odom-scale")

@@ -29,6 +29,7 @@ from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray
 from mrs_nav.limits import MAX_COORDINATE_M, MAX_SHAPES, MAX_SIZE_M
 from mrs_nav.maps.world import World
+from mrs_nav.textfiles import read_text
 
 BoolArray = npt.NDArray[np.bool_]
 # An obstacle list of MAX_SHAPES circles is a few tens of kilobytes of JSON.
@@ -144,16 +145,7 @@ class Obstacles:
     @classmethod
     def from_json_file(cls, path: str | Path) -> Obstacles:
         """:meth:`from_json` on the text of a file."""
-        file = Path(path)
-        try:
-            if not file.is_file() or file.stat().st_size > _MAX_JSON_BYTES:
-                raise InvalidInputError(f"{path}: not a regular file of at most {_MAX_JSON_BYTES} bytes")
-            text = file.read_text(encoding="utf-8")
-        except OSError as err:
-            raise InvalidInputError(f"{path}: cannot read ({err.strerror})") from None
-        except UnicodeDecodeError as err:
-            raise InvalidInputError(f"{path}: not UTF-8 text ({err.reason} at byte {err.start})") from None
-        return cls.from_json(text, str(path))
+        return cls.from_json(read_text(Path(path), _MAX_JSON_BYTES, "obstacles"), str(path))
 
     @classmethod
     def from_world(cls, world: World) -> Obstacles:

@@ -22,6 +22,7 @@ from mrs_nav.errors import WorldFileError
 from mrs_nav.geometry import FloatArray
 from mrs_nav.limits import MAX_COORDINATE_M, MAX_SHAPES, MAX_SIZE_M
 from mrs_nav.robot import BURGER_HEIGHT
+from mrs_nav.textfiles import DESCRIPTION_LIMIT, read_text
 
 # Includes that carry no obstacle: the ground is part of every simulation and light does not collide.
 _HARMLESS_INCLUDES = frozenset({"model://ground_plane", "model://sun"})
@@ -263,8 +264,4 @@ def parse_world(text: str, where: str = "<string>") -> World:
 def load_world(path: str | Path) -> World:
     """Load a Gazebo SDF ``.world`` file."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as err:
-        raise WorldFileError(f"{path}: cannot read world file: {err}") from err
-    return parse_world(text, str(path))
+    return parse_world(read_text(path, DESCRIPTION_LIMIT, "world file", WorldFileError), str(path))

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from mrs_nav.errors import InvalidInputError
+from mrs_nav.textfiles import DESCRIPTION_LIMIT, read_text
 
 #: name -> (which way is better, tolerance in the metric's unit) used by :func:`make_golden`.
 DEFAULT_TOLERANCES: dict[str, tuple[str, float]] = {
@@ -63,15 +64,30 @@ def make_golden(bag_name: str, options: Sequence[str], metrics: Mapping[str, flo
     return {"bag": bag_name, "options": list(options), "metrics": entries}
 
 
-def load_golden(path: Path) -> dict[str, dict[str, Any]]:
-    """The ``metrics`` table of a golden file, validated."""
+def read_golden(path: Path) -> dict[str, Any]:
+    """A golden file, validated: ``options`` (a list of strings) and ``metrics`` (see :func:`load_golden`)."""
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as err:
-        raise InvalidInputError(f"cannot read golden file {path}: {err.strerror}") from None
+        data = json.loads(read_text(path, DESCRIPTION_LIMIT, "golden file"))
     except json.JSONDecodeError as err:
         raise InvalidInputError(f"golden file {path} is not JSON: {err}") from None
-    metrics = data.get("metrics") if isinstance(data, dict) else None
+    except RecursionError:
+        raise InvalidInputError(f"golden file {path} is not JSON: nested too deeply") from None
+    if not isinstance(data, dict):
+        raise InvalidInputError(f"golden file {path} is not a JSON object")
+    options = data.setdefault("options", [])
+    if not isinstance(options, list) or not all(isinstance(o, str) for o in options):
+        raise InvalidInputError(f"golden file {path}: 'options' must be a list of strings")
+    _check_metrics(path, data.get("metrics"))
+    return data
+
+
+def load_golden(path: Path) -> dict[str, dict[str, Any]]:
+    """The ``metrics`` table of a golden file, validated."""
+    metrics: dict[str, dict[str, Any]] = read_golden(path)["metrics"]
+    return metrics
+
+
+def _check_metrics(path: Path, metrics: object) -> None:
     if not isinstance(metrics, dict):
         raise InvalidInputError(f"golden file {path} has no 'metrics' object")
     for name, entry in metrics.items():
@@ -87,7 +103,6 @@ def load_golden(path: Path) -> dict[str, dict[str, Any]]:
                 f"golden file {path}: metric {name!r} needs a number 'value', a 'tolerance' >= 0 and 'better' in "
                 f"{', '.join(_BETTER)}"
             )
-    return metrics
 
 
 def regressions(metrics: Mapping[str, float | int | None], golden: Mapping[str, Mapping[str, Any]]) -> list[Regression]:

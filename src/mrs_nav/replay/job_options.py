@@ -7,13 +7,13 @@ the file recorded) and ``bench replay-batch``, so that a bench replays exactly w
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.limits import MAX_ITERATIONS, MAX_SEED
 from mrs_nav.options import count_option, seed_option
 from mrs_nav.replay.batch import BagJob
+from mrs_nav.replay.golden import read_golden
 from mrs_nav.replay.session_replay import PlanOptions
 
 
@@ -50,7 +50,7 @@ def job_from_args(args: argparse.Namespace, bag: Path, out: Path, golden: Path |
 
 def golden_job(bag: Path, out: Path, golden: Path) -> BagJob:
     """The job of a bag held to ``golden``, with the options the golden file recorded."""
-    options = json.loads(golden.read_text(encoding="utf-8")).get("options", [])
+    options = read_golden(golden)["options"]
     parser = argparse.ArgumentParser(prog=f"options of {golden}", add_help=False, exit_on_error=False)
     add_options(parser)
     try:

@@ -34,9 +34,11 @@ import numpy as np
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D, wrap_angle
+from mrs_nav.textfiles import bounded_lines, check_regular
 
 MIN_OFFSET_VOTES = 3
 MAX_RELATIONS = 1_000_000  # lines; the published files hold a few thousand
+_MAX_LINE_CHARS = 4096  # a relation is two stamps and six numbers
 OFFSET_RESOLUTION_S = 1e-3
 
 
@@ -76,9 +78,10 @@ class RelationErrors:
 def load_relations(path: Path) -> list[Relation]:
     """Read a relations file; a malformed line raises InvalidInputError naming ``file:line``."""
     relations: list[Relation] = []
+    check_regular(path, "relations file")
     try:
         with path.open(encoding="utf-8", errors="replace") as handle:
-            for number, line in enumerate(handle, start=1):
+            for number, line in enumerate(bounded_lines(handle, _MAX_LINE_CHARS, str(path)), start=1):
                 words = line.split()
                 if not words or words[0].startswith("#"):
                     continue

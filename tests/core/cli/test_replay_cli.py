@@ -43,7 +43,7 @@ def killed(tmp_path):
         (["{cut}", "--slam"], "ERROR: bag {cut} is truncated: its index should start at byte"),
         (["{bag}", "--plan", "--plan-iterations", "0"], "ERROR: mrs-nav replay: argument --plan-iterations: must"),
         (["{bag}"], "ERROR: nothing to do: give --slam and/or --plan"),
-        (["{bag}", "--slam", "--against", "{missing}"], "ERROR: cannot read golden file {missing}"),
+        (["{bag}", "--slam", "--against", "{missing}"], "ERROR: {missing}: cannot read golden file: No such file or directory"),
     ],
 )
 def test_bad_input_is_one_error_line(args, message, truncated, tmp_path, capsys):

@@ -85,6 +85,12 @@ def test_malformed_xml_and_missing_file_name_the_file(tmp_path: Path) -> None:
         parse_world("<sdf><world>", "broken.world")
     with pytest.raises(WorldFileError, match=r"nothing\.world: cannot read"):
         load_world(tmp_path / "nothing.world")
+    # a device was read without end, and binary text was a decoding traceback's message
+    with pytest.raises(WorldFileError, match=r"^/dev/zero: cannot read world file: not a regular file$"):
+        load_world("/dev/zero")
+    (tmp_path / "binary.world").write_bytes(b"<sdf>\xff")
+    with pytest.raises(WorldFileError, match=r"binary\.world: cannot read world file: not UTF-8 text \(byte 5\)$"):
+        load_world(tmp_path / "binary.world")
 
 
 def _box(pose: str = "0 0 0.25 0 0 0", size: str = "1 1 0.5") -> str:

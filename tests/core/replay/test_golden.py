@@ -5,7 +5,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from mrs_nav.errors import InvalidInputError
-from mrs_nav.replay.golden import DEFAULT_TOLERANCES, load_golden, make_golden, regressions
+from mrs_nav.replay.golden import DEFAULT_TOLERANCES, load_golden, make_golden, read_golden, regressions
 
 finite = st.floats(-1e3, 1e3, allow_nan=False)
 tolerance = st.floats(0.0, 10.0, allow_nan=False)
@@ -48,7 +48,12 @@ def test_missing_and_null_metrics_regress():
     ("text", "message"),
     [
         ("{", "is not JSON"),
-        ("[]", "has no 'metrics' object"),
+        ("[]", "is not a JSON object"),
+        ("{}", "has no 'metrics' object"),
+        # options are read before any replay of a bag with its golden file beside it: these were tracebacks
+        ('{"options": 5, "metrics": {}}', "'options' must be a list of strings"),
+        ('{"options": [1], "metrics": {}}', "'options' must be a list of strings"),
+        ("[" * 100_000, "nested too deeply"),
         ('{"metrics": {"x": {"value": 1, "tolerance": -1, "better": "lower"}}}', "metric 'x' needs"),
         ('{"metrics": {"x": {"value": 1, "tolerance": 0, "better": "sideways"}}}', "metric 'x' needs"),
     ],
@@ -57,10 +62,12 @@ def test_malformed_golden_file_is_named(text, message, tmp_path):
     path = tmp_path / "g.json"
     path.write_text(text)
     with pytest.raises(InvalidInputError, match=rf"golden file .*g\.json.*{message}"):
-        load_golden(path)
+        read_golden(path)
 
 
 def test_missing_golden_file(tmp_path):
-    with pytest.raises(InvalidInputError, match=r"cannot read golden file .*nope\.json"):
+    with pytest.raises(InvalidInputError, match=r"nope\.json: cannot read golden file: No such file"):
         load_golden(tmp_path / "nope.json")
+    with pytest.raises(InvalidInputError, match="cannot read golden file: not a regular file"):
+        load_golden(tmp_path)
     assert json.loads(json.dumps(make_golden("b", [], {})))["metrics"] == {}
