@@ -13,6 +13,16 @@ from mrs_nav.errors import InvalidInputError
 FloatArray = npt.NDArray[np.float64]
 
 
+def format_point(x: float, y: float) -> str:
+    """``(x, y)`` in metres to the centimetre for log lines; in three significant digits past 1000 km, where a goal
+    sent as ``1e300`` would otherwise print three hundred digits."""
+
+    def one(v: float) -> str:
+        return f"{v:.2f}" if abs(v) < 1e6 else f"{v:.3g}"
+
+    return f"({one(x)}, {one(y)})"
+
+
 def wrap_angle(angle: float) -> float:
     """Return ``angle`` wrapped to [-pi, pi)."""
     return (angle + math.pi) % (2.0 * math.pi) - math.pi

@@ -102,6 +102,8 @@ def run(args: argparse.Namespace) -> int:
     if len(args.bags) > 1 or args.bags[0].is_dir():
         return _run_batch(args)
     bag = args.bags[0]
+    if args.cluster:
+        print(f"NOTE: --cluster fans out several bags; the one bag {bag} is replayed here", file=sys.stderr)
     job = job_from_args(args, bag, args.out, args.against)
     relations = load_relations(args.relations) if args.relations else None
     if args.relations_offset is not None and not math.isfinite(args.relations_offset):

@@ -109,8 +109,9 @@ class OccupancyGrid:
             dx, dy = pts[:, 0] - x0, pts[:, 1] - y0
             u = (c * dx + s * dy) / self.resolution
             v = (-s * dx + c * dy) / self.resolution
-        col = np.floor(u).astype(np.intp)
-        row = np.floor(v).astype(np.intp)
+        # A point a googol away has no integer cell: clipped one cell past the border, it is simply outside.
+        col = np.floor(np.clip(u, -1.0, self.width)).astype(np.intp)
+        row = np.floor(np.clip(v, -1.0, self.height)).astype(np.intp)
         inside = (col.view(np.uintp) < self.width) & (row.view(np.uintp) < self.height)
         return row, col, inside
 

@@ -16,6 +16,7 @@ from enum import Enum
 import numpy as np
 from scipy import ndimage
 
+from mrs_nav.geometry import format_point
 from mrs_nav.maps.occupancy_grid import UNKNOWN, OccupancyGrid
 
 
@@ -112,7 +113,7 @@ class GoalTracker:
 
     def describe(self) -> str:
         assert self.goal is not None
-        return f"goal ({self.goal[0]:.2f}, {self.goal[1]:.2f})"
+        return f"goal {format_point(*self.goal)}"
 
     def accept(self, x: float, y: float, yaw: float | None = None) -> list[NavEvent]:
         """Make ``(x, y)`` (heading ``yaw``) the active goal; the events (a preemption first, if any)."""
@@ -123,7 +124,7 @@ class GoalTracker:
         self.yaw = None if yaw is None else float(yaw)
         self.state = GoalState.ACTIVE
         heading = "" if yaw is None else f", heading {yaw:.2f} rad"
-        events.append(NavEvent(EventKind.ACCEPTED, f"goal ({x:.2f}, {y:.2f}{heading}) accepted"))
+        events.append(NavEvent(EventKind.ACCEPTED, f"goal {format_point(x, y)}{heading} accepted"))
         return events
 
     def cancel(self) -> list[NavEvent]:

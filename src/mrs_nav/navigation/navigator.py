@@ -41,7 +41,7 @@ import numpy.typing as npt
 from mrs_nav.control.goal_approach import GoalApproach
 from mrs_nav.control.path_following import PathFollower
 from mrs_nav.errors import InvalidInputError
-from mrs_nav.geometry import FloatArray, Pose2D, wrap_angle
+from mrs_nav.geometry import FloatArray, Pose2D, format_point, wrap_angle
 from mrs_nav.maps.occupancy_grid import OccupancyGrid, planning_grid
 from mrs_nav.navigation.config import NavigatorConfig
 from mrs_nav.navigation.goal import EventKind, GoalState, GoalTracker, NavEvent, goal_refusal
@@ -176,7 +176,7 @@ class Navigator:
         preempts the current one; a bad one is refused and leaves the current goal (if any) running."""
         refusal = goal_refusal(self.marked_grid, self.inflated_grid, x, y, yaw=yaw, inflation_m=self.config.inflation_m)
         if refusal is not None:
-            return [NavEvent(EventKind.REFUSED, f"goal ({x:.2f}, {y:.2f}) refused: {refusal}")]
+            return [NavEvent(EventKind.REFUSED, f"goal {format_point(x, y)} refused: {refusal}")]
         events = self._goal.accept(x, y, yaw)
         self._reset_goal()
         self._policy.new_goal(now)
@@ -336,7 +336,7 @@ class Navigator:
             self.marked_grid, self.inflated_grid, goal[0], goal[1], yaw=None, inflation_m=self.config.inflation_m
         )
         if refusal is not None:
-            raise InvalidInputError(f"goal ({goal[0]:.2f}, {goal[1]:.2f}): {refusal}")
+            raise InvalidInputError(f"goal {format_point(*goal)}: {refusal}")
         grid, raw = self._maps()
         return PlanRequest(goal, start, math.nan, "make_plan", grid, raw, math.inf)
 

@@ -32,7 +32,7 @@ from std_msgs.msg import String
 
 from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.fields.follower import FieldFollower, FieldFollowerConfig, scan_obstacles
-from mrs_nav.geometry import Pose2D
+from mrs_nav.geometry import Pose2D, format_point
 from mrs_nav.maps.obstacles import Obstacles
 from mrs_nav.maps.world import load_world
 from mrs_nav.robot import BURGER_MAX_ANGULAR, BURGER_MAX_LINEAR, BURGER_RADIUS
@@ -181,14 +181,14 @@ class PotentialFieldNavigationNode:
     def _set_goal(self, x: float, y: float) -> None:
         obstacles = self._world_obstacles
         if obstacles is not None and obstacles.inflated(self.config.follower.robot_radius).contains([[x, y]])[0]:
-            rospy.logwarn(f"potential_field_navigation: goal ({x:.2f}, {y:.2f}) refused: inside an obstacle")
-            self._status("refused", f"goal ({x:.2f}, {y:.2f}) refused: inside an obstacle")
+            rospy.logwarn(f"potential_field_navigation: goal {format_point(x, y)} refused: inside an obstacle")
+            self._status("refused", f"goal {format_point(x, y)} refused: inside an obstacle")
             return
         with self._lock:
             current = obstacles or self._scan_obstacles or Obstacles()
             self._follower = FieldFollower((x, y), current, self.config.follower, self._rng)
-        rospy.loginfo(f"potential_field_navigation: goal ({x:.2f}, {y:.2f}) accepted")
-        self._status("active", f"goal ({x:.2f}, {y:.2f}) accepted")
+        rospy.loginfo(f"potential_field_navigation: goal {format_point(x, y)} accepted")
+        self._status("active", f"goal {format_point(x, y)} accepted")
 
     def _on_scan(self, msg: LaserScan) -> None:
         pose = self._pose()
@@ -259,7 +259,7 @@ class PotentialFieldNavigationNode:
         publish_unless_shutdown(self._cmd_pub, twist, "potential_field_navigation")
         if command.done:
             gx, gy = follower.goal
-            message = f"goal ({gx:.2f}, {gy:.2f}) reached, {math.hypot(gx - pose.x, gy - pose.y):.3f} m away"
+            message = f"goal {format_point(gx, gy)} reached, {math.hypot(gx - pose.x, gy - pose.y):.3f} m away"
             rospy.loginfo(f"potential_field_navigation: {message}")
             self._status("reached", message)
             with self._lock:

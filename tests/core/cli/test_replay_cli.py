@@ -43,7 +43,7 @@ def killed(tmp_path):
         (["{cut}", "--slam"], "ERROR: bag {cut} is truncated: its index should start at byte"),
         (["{bag}", "--plan", "--plan-iterations", "0"], "ERROR: mrs-nav replay: argument --plan-iterations: must"),
         (["{bag}"], "ERROR: nothing to do: give --slam and/or --plan"),
-        (["{bag}", "--slam", "--against", "{missing}"], "ERROR: {missing}: cannot read golden file: No such file or directory"),
+        (["{bag}", "--slam", "--against", "{missing}"], "ERROR: {missing}: cannot read golden file: No such file"),
     ],
 )
 def test_bad_input_is_one_error_line(args, message, truncated, tmp_path, capsys):
@@ -83,3 +83,11 @@ def test_bag_without_session_topics_gives_null_metrics(tmp_path, capsys):
     assert metrics["ate_rmse_m"] is None
     assert metrics["map_iou"] is None
     assert (metrics["goals"], metrics["goals_reachable"]) == (0, 0)
+
+
+def test_one_bag_with_a_cluster_says_it_is_replayed_here(tmp_path, capsys):
+    # --cluster fans several bags out; with one bag it was ignored without a word
+    out = tmp_path / "out"
+    assert main(["replay", str(SIMPLE), "--slam", "--out", str(out), "--cluster", "tcp://127.0.0.1:9"]) == 0
+    assert _lines(capsys) == [f"NOTE: --cluster fans out several bags; the one bag {SIMPLE} is replayed here"]
+    assert (out / "metrics.json").is_file()

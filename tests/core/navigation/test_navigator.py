@@ -132,6 +132,14 @@ def test_bad_goals_are_refused_and_cause_no_motion(goal: tuple[float, float], re
     assert nav.update(Pose2D(-1.5, -1.5, 0.0), 0.1) == NavCommand(0.0, 0.0)
 
 
+def test_a_goal_a_googol_away_is_refused_in_a_line_of_readable_length() -> None:
+    nav = Navigator(astar)
+    nav.set_map(arena(), 0.0)
+    (event,) = nav.set_goal(1e300, -1e300, 0.0)
+    assert event.kind is EventKind.REFUSED
+    assert event.message == "goal (1e+300, -1e+300) refused: it lies outside the map"
+
+
 def test_a_goal_before_any_map_is_refused() -> None:
     (event,) = Navigator(astar).set_goal(1.0, 1.0, 0.0)
     assert event.kind is EventKind.REFUSED
