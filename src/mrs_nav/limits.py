@@ -21,6 +21,14 @@ MAX_SHAPES = 2000
 MAX_GRID_CELLS = 20_000_000
 #: A map file's image (.pgm) in bytes: 16-bit pixels of the largest grid plus header room.
 MAX_IMAGE_BYTES = 2 * MAX_GRID_CELLS + 4096
+#: A map file's resolution (cell side), metres: 0.1 mm is finer than any range sensor resolves and 1 km coarser
+#: than any map a robot plans on; map_server takes any positive number, but at 1e-300 or 1e300 the cell
+#: arithmetic (and the message's float32 resolution) turns to zero or infinity.
+MIN_MAP_RESOLUTION_M = 1e-4
+MAX_MAP_RESOLUTION_M = 1e3
+#: A map file's origin x and y, metres from the map frame: 10,000 km holds any UTM easting and northing (maps
+#: anchored in geographic coordinates) while keeping cell positions exact to far below a millimetre in float64.
+MAX_MAP_ORIGIN_M = 1e7
 #: Obstacle inflation radius (the robot's radius), metres: larger than any robot this stack drives.
 MAX_ROBOT_RADIUS_M = 2.0
 #: Planner and navigation budgets: wall or sim seconds.

@@ -65,14 +65,63 @@ def test_served_map_equals_the_file_and_the_saver_writes_it_back(
     assert again.origin == pytest.approx(expected.origin)
 
 
-def test_a_missing_map_file_is_one_error_line_naming_it(ros_master: RosMaster, tmp_path: Path) -> None:
-    missing = tmp_path / "nowhere.yaml"
-    result = _rosrun(ros_master, "map_server", str(missing))
+@pytest.mark.parametrize(
+    ("yaml_text", "message"),
+    [
+        (None, "cannot read map description"),
+        ('image: "\\0"\nresolution: 0.05\norigin: [0, 0, 0]\n', "key 'image' holds a NUL byte"),
+        ("image: m.pgm\nresolution: 1e-300\norigin: [0, 0, 0]\n", "resolution must be 0.0001 .. 1000 m"),
+    ],
+)
+def test_a_missing_or_bad_map_file_is_one_error_line_naming_it(
+    ros_master: RosMaster, tmp_path: Path, yaml_text: str | None, message: str
+) -> None:
+    path = tmp_path / "m.yaml"
+    if yaml_text is not None:
+        path.write_text(yaml_text)
+    result = _rosrun(ros_master, "map_server", str(path))
     assert result.returncode == 1
     errors = [line for line in result.stderr.splitlines() if line.startswith("ERROR:")]
     assert len(errors) == 1
-    assert str(missing) in errors[0]
+    assert errors[0].startswith(f"ERROR: {path}: {message}"), errors
     assert "Traceback" not in result.stderr
+
+
+@pytest.mark.parametrize("name", ["/", ".", ""])
+def test_map_saver_refuses_a_name_that_is_no_file_before_waiting(ros_master: RosMaster, name: str) -> None:
+    result = _rosrun(ros_master, "map_saver", "-f", name)
+    assert result.returncode == 1
+    assert result.stderr.strip() == f"ERROR: -f {name or repr(name)}: not a file name"
+
+
+def test_map_saver_refuses_a_folder_in_the_way_before_writing_anything(ros_master: RosMaster, tmp_path: Path) -> None:
+    (tmp_path / "d.yaml").mkdir()
+    result = _rosrun(ros_master, "map_saver", "-f", str(tmp_path / "d"))
+    assert result.returncode == 1
+    assert result.stderr.strip() == f"ERROR: {tmp_path / 'd.yaml'}: cannot write map: not a regular file"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.yaml"]
+
+
+def test_map_saver_reports_a_map_no_file_can_hold_and_exits(
+    ros_master: RosMaster, rospy_node: Any, tmp_path: Path
+) -> None:
+    from nav_msgs.msg import OccupancyGrid
+
+    msg = OccupancyGrid()
+    msg.info.resolution, msg.info.width, msg.info.height = 0.05, 2, 2
+    msg.info.origin.position.x, msg.info.origin.orientation.w = 1e300, 1.0
+    msg.data = [0, 0, 100, -1]
+    pub = rospy_node.Publisher("/far_map", OccupancyGrid, queue_size=1, latch=True)
+    try:
+        pub.publish(msg)
+        result = _rosrun(ros_master, "map_saver", "-f", str(tmp_path / "far"), "map:=/far_map")
+    finally:
+        pub.unregister()
+    assert result.returncode == 1
+    assert result.stderr.strip() == (
+        f"ERROR: {tmp_path / 'far.yaml'}: origin x and y must be within +-1e+07 m, got 1e+300, 0"
+    )
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_map_saver_rejects_thresholds_out_of_order(ros_master: RosMaster, tmp_path: Path) -> None:
@@ -88,3 +137,24 @@ def test_map_saver_option_errors_are_one_line(ros_master: RosMaster, tmp_path: P
     assert result.stderr.strip() == (
         "ERROR: map_saver: argument --occ: expected an integer, got '1e9' (see map_saver --help)"
     )
+
+
+def test_map_saver_is_done_even_when_saving_fails_unexpectedly(
+    rospy_node: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from nav_msgs.msg import OccupancyGrid
+
+    from mrs_nav.ros import map_server_node
+
+    def broken(*_args: Any, **_kwargs: Any) -> Path:
+        raise RuntimeError("a bug in saving")
+
+    monkeypatch.setattr(map_server_node, "save_map", broken)
+    saver = map_server_node.MapSaverNode(map_server_node.SaverOptions(tmp_path / "x"))
+    msg = OccupancyGrid()
+    msg.info.resolution, msg.info.width, msg.info.height, msg.data = 0.05, 1, 1, [0]
+    msg.info.origin.orientation.w = 1.0
+    with pytest.raises(RuntimeError, match="a bug in saving"):
+        saver._on_map(msg)  # rospy would log this traceback; map_saver must still stop waiting
+    assert saver.done.is_set()
+    assert (saver.saved, saver.error) == (None, None)

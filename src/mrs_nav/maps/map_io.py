@@ -7,12 +7,21 @@ mode (the default) ``p > occupied_thresh`` gives 100, ``p < free_thresh`` gives 
 ``raw`` mode takes the pixel value as the cell value. Writing follows map_saver: free 254, occupied 0,
 unknown 205, with ``occupied_thresh 0.65`` and ``free_thresh 0.196``, so that a saved trinary grid reads back
 identical. Only PGM images (binary P5 or ASCII P2) are read.
+
+Both directions hold a map to a resolution of :data:`~mrs_nav.limits.MIN_MAP_RESOLUTION_M` ..
+:data:`~mrs_nav.limits.MAX_MAP_RESOLUTION_M` and an origin within :data:`~mrs_nav.limits.MAX_MAP_ORIGIN_M` of the
+frame, so that every map written here reads back. Numbers are written as floats that YAML 1.1 readers (PyYAML,
+rosparam) read as floats too, and the two files are written beside their targets and then renamed into place, so
+a failure leaves neither half-written.
 """
 
 from __future__ import annotations
 
+import contextlib
+import json
 import math
 import re
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -20,7 +29,13 @@ import numpy as np
 import numpy.typing as npt
 
 from mrs_nav.errors import InvalidInputError, MapFileError
-from mrs_nav.limits import MAX_IMAGE_BYTES, check_grid_cells
+from mrs_nav.limits import (
+    MAX_IMAGE_BYTES,
+    MAX_MAP_ORIGIN_M,
+    MAX_MAP_RESOLUTION_M,
+    MIN_MAP_RESOLUTION_M,
+    check_grid_cells,
+)
 from mrs_nav.maps.occupancy_grid import FREE_MAX, OCCUPIED, OCCUPIED_MIN, UNKNOWN, OccupancyGrid
 from mrs_nav.textfiles import load_yaml, read_regular, read_text
 
@@ -39,6 +54,25 @@ def _number(meta: dict[str, Any], key: str, where: Path, default: float | None =
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
         raise MapFileError(f"{where}: {key} must be a finite number, got {value!r}")
     return float(value)
+
+
+def _check_geometry(resolution: float, origin: Sequence[float], where: Path) -> None:
+    if not MIN_MAP_RESOLUTION_M <= resolution <= MAX_MAP_RESOLUTION_M:
+        raise MapFileError(
+            f"{where}: resolution must be {MIN_MAP_RESOLUTION_M:g} .. {MAX_MAP_RESOLUTION_M:g} m per cell, "
+            f"got {resolution:g}"
+        )
+    if not (abs(origin[0]) <= MAX_MAP_ORIGIN_M and abs(origin[1]) <= MAX_MAP_ORIGIN_M):
+        raise MapFileError(
+            f"{where}: origin x and y must be within +-{MAX_MAP_ORIGIN_M:g} m, got {origin[0]:g}, {origin[1]:g}"
+        )
+
+
+def _yaml_float(value: float) -> str:
+    """``value`` as a YAML float for 1.1 readers too: ``repr`` writes ``1e-05``, which YAML 1.1 reads as text, so
+    the mantissa gets a dot (``1.0e-05``)."""
+    text = repr(float(value))
+    return text if "." in text else text.replace("e", ".0e")
 
 
 def read_pgm(path: Path) -> npt.NDArray[np.int32]:
@@ -71,10 +105,13 @@ def read_pgm(path: Path) -> npt.NDArray[np.int32]:
             )
         pixels = np.frombuffer(body, dtype=dtype, count=count).astype(np.int32)
     else:
-        try:
-            pixels = np.array(body.split(), dtype=np.int32)
-        except ValueError:
-            raise MapFileError(f"{path}: PGM (P2) pixels must be integers") from None
+        # Only digits: numpy would read "-5" and wrap 4294967296 to 0 in int32, both then passing as pixels.
+        # Six digits are more than any maxval (65535) needs.
+        bad = re.search(rb"\S*(?:[^\s\d]|\d{6})\S*", body)
+        if bad is not None:
+            token = bad.group()[:20].decode(errors="replace")
+            raise MapFileError(f"{path}: PGM (P2) pixels must be integers 0 .. {maxval}, got {token!r}")
+        pixels = np.array(body.split(), dtype=np.int32)
         if pixels.size != count:
             raise MapFileError(f"{path}: PGM has {pixels.size} pixels, expected {count}")
     if np.any(pixels > maxval):
@@ -98,9 +135,9 @@ def load_map(path: str | Path) -> OccupancyGrid:
     image = meta.get("image")
     if not isinstance(image, str) or not image:
         raise MapFileError(f"{path}: missing or empty key 'image'")
+    if "\0" in image:  # no file name holds one; the OS would refuse the path with a bare ValueError
+        raise MapFileError(f"{path}: key 'image' holds a NUL byte")
     resolution = _number(meta, "resolution", path)
-    if resolution <= 0.0:
-        raise MapFileError(f"{path}: resolution must be positive, got {resolution}")
     origin = meta.get("origin")
     if (
         not isinstance(origin, list)
@@ -108,6 +145,7 @@ def load_map(path: str | Path) -> OccupancyGrid:
         or not all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in origin)
     ):
         raise MapFileError(f"{path}: origin must be a list of three finite numbers [x, y, yaw], got {origin!r}")
+    _check_geometry(resolution, origin, path)
     negate = meta.get("negate", 0)
     if negate not in (0, 1) or isinstance(negate, float):
         raise MapFileError(f"{path}: negate must be 0 or 1, got {negate!r}")
@@ -138,34 +176,54 @@ def load_map(path: str | Path) -> OccupancyGrid:
         raise MapFileError(f"{path}: {err}") from err
 
 
+def map_targets(path: Path) -> tuple[Path, Path]:
+    """The ``.yaml`` at ``path`` and the ``.pgm`` beside it that :func:`save_map` writes; MapFileError when ``path``
+    does not end in ``.yaml`` or either target is something a file cannot replace (a folder)."""
+    if path.suffix != ".yaml":
+        raise MapFileError(f"{path}: a map description must end in .yaml")
+    image_path = path.with_suffix(".pgm")
+    for target in (path, image_path):
+        if target.exists() and not target.is_file():
+            raise MapFileError(f"{target}: cannot write map: not a regular file")
+    return path, image_path
+
+
 def save_map(
     grid: OccupancyGrid, path: str | Path, *, occupied_min: int = OCCUPIED_MIN, free_max: int = FREE_MAX
 ) -> Path:
     """Write ``grid`` as map_server files: ``path`` (``.yaml``) and the ``.pgm`` beside it; returns the yaml path.
 
     Cells at or above ``occupied_min`` (65) are written occupied, ``0..free_max`` (19) free, the rest unknown
-    (map_saver's convention; its ``--occ`` and ``--free``).
+    (map_saver's convention; its ``--occ`` and ``--free``). A grid whose resolution or origin a map file cannot
+    hold is refused before anything is written; a failure leaves both targets as they were.
     """
-    path = Path(path)
-    if path.suffix != ".yaml":
-        raise InvalidInputError(f"{path}: a map description must end in .yaml")
+    path, image_path = map_targets(Path(path))
     if not 0 <= free_max < occupied_min <= OCCUPIED:
         raise InvalidInputError(f"need 0 <= free ({free_max}) < occupied ({occupied_min}) <= 100")
-    image_path = path.with_suffix(".pgm")
+    _check_geometry(grid.resolution, grid.origin, path)
     pixels = np.full(grid.values.shape, _SAVE_UNKNOWN, dtype=np.uint8)
     pixels[(grid.values >= 0) & (grid.values <= free_max)] = _SAVE_FREE
     pixels[grid.values >= occupied_min] = _SAVE_OCCUPIED
-    header = f"P5\n# CREATOR: mrs_nav {grid.resolution:.3f} m/pix\n{grid.width} {grid.height}\n255\n".encode()
+    header = f"P5\n# CREATOR: mrs_nav {grid.resolution:g} m/pix\n{grid.width} {grid.height}\n255\n".encode()
     meta = (
-        f"image: {image_path.name}\n"
-        f"resolution: {grid.resolution!r}\n"
-        f"origin: [{grid.origin[0]!r}, {grid.origin[1]!r}, {grid.origin[2]!r}]\n"
+        # A JSON string is a YAML double-quoted scalar: a name holding ': ', '#' or a newline reads back as itself.
+        f"image: {json.dumps(image_path.name)}\n"
+        f"resolution: {_yaml_float(grid.resolution)}\n"
+        f"origin: [{', '.join(_yaml_float(v) for v in grid.origin)}]\n"
         "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\nmode: trinary\n"
     )
+    contents = ((image_path, header + pixels[::-1].tobytes()), (path, meta.encode()))
+    partials = [target.with_name(f".{target.name}.partial") for target, _ in contents]
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        image_path.write_bytes(header + pixels[::-1].tobytes())
-        path.write_text(meta, encoding="utf-8")
+        for partial, (_, data) in zip(partials, contents, strict=True):
+            partial.write_bytes(data)
+        for partial, (target, _) in zip(partials, contents, strict=True):
+            partial.replace(target)
     except OSError as err:
         raise MapFileError(f"{path}: cannot write map: {err.strerror or err}") from err
+    finally:
+        for partial in partials:
+            with contextlib.suppress(OSError):  # renamed into place, never created, or its folder is not one
+                partial.unlink()
     return path

@@ -19,8 +19,9 @@ from nav_msgs.msg import MapMetaData
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.srv import GetMap, GetMapRequest, GetMapResponse
 
+from mrs_nav.cli.common import check_writable
 from mrs_nav.errors import InvalidInputError, MrsNavError
-from mrs_nav.maps.map_io import load_map, save_map
+from mrs_nav.maps.map_io import load_map, map_targets, save_map
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.options import Parser, integer_option
 from mrs_nav.ros.map_messages import occupancy_grid_msg
@@ -59,10 +60,16 @@ class SaverOptions:
     occupied_min: int = 65
     free_max: int = 25
 
+    @property
+    def yaml_path(self) -> Path:
+        return self.name.with_name(self.name.name + ".yaml")
+
     @classmethod
     def from_argv(cls, argv: Sequence[str]) -> SaverOptions:
+        """Options of ``map_saver``; a name that cannot take ``.yaml`` (``/``, ``.``, empty) or targets that cannot
+        be written are refused here, before waiting for the map."""
         parser = Parser(prog="map_saver", description="Save the map on topic 'map' to NAME.yaml/.pgm.")
-        parser.add_argument("-f", dest="name", type=Path, default=Path("map"), help="file name without extension")
+        parser.add_argument("-f", dest="name", default="map", help="file name without extension")
         parser.add_argument(
             "--occ", type=integer_option(0, 100), default=65, help="cells at or above this are occupied (0-100)"
         )
@@ -70,14 +77,19 @@ class SaverOptions:
             "--free", type=integer_option(0, 100), default=25, help="cells at or below this are free (0-100)"
         )
         args = parser.parse_args(argv)
-        options = cls(args.name, args.occ, args.free)
+        if Path(args.name).name in ("", ".", ".."):
+            raise InvalidInputError(f"-f {args.name or repr(args.name)}: not a file name")
+        options = cls(Path(args.name), args.occ, args.free)
         if not 0 <= options.free_max < options.occupied_min <= 100:
             raise InvalidInputError(f"need 0 <= --free ({args.free}) < --occ ({args.occ}) <= 100")
+        for target in map_targets(options.yaml_path):
+            check_writable(target, "-f")
         return options
 
 
 class MapSaverNode:
-    """Saves the first message on ``map`` and is then :attr:`done` (``saved`` holds the yaml path)."""
+    """Saves the first message on ``map`` and is then :attr:`done` (``saved`` holds the yaml path, or ``error``
+    why not)."""
 
     def __init__(self, options: SaverOptions) -> None:
         self.options = options
@@ -89,13 +101,18 @@ class MapSaverNode:
     def _on_map(self, msg: OccupancyGridMsg) -> None:
         if self.done.is_set():
             return
-        o = self.options
         try:
-            grid = grid_from_msg(msg)
-            self.saved = save_map(
-                grid, o.name.with_name(o.name.name + ".yaml"), occupied_min=o.occupied_min, free_max=o.free_max
-            )
+            self.saved = self._save(msg)
         except MrsNavError as err:
             self.error = err
-        self._sub.unregister()
-        self.done.set()
+        finally:  # whatever went wrong, map_saver reports and exits instead of waiting for a map that came
+            self._sub.unregister()
+            self.done.set()
+
+    def _save(self, msg: OccupancyGridMsg) -> Path:
+        try:
+            grid = grid_from_msg(msg)
+        except InvalidInputError as err:
+            raise InvalidInputError(f"{self._sub.resolved_name}: {err}") from err
+        o = self.options
+        return save_map(grid, o.yaml_path, occupied_min=o.occupied_min, free_max=o.free_max)

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 
 from mrs_nav.errors import MapFileError
 from mrs_nav.maps.map_io import load_map, save_map
@@ -34,6 +35,62 @@ def test_round_trip_of_a_non_square_map_keeps_values_resolution_and_origin(tmp_p
         assert np.array_equal(loaded.values, values)
         assert loaded.resolution == 0.025
         assert loaded.origin == (-3.25, 1.5, 0.1)
+
+
+@pytest.mark.parametrize(
+    ("resolution", "origin"),
+    [(5e-2, (1e-05, -2.0, 1e5)), (1e-4, (-1e7, 1e7, -3.0)), (1e3, (1e-300, 5e-324, 1e-05))],
+)
+def test_saved_numbers_read_back_exactly_and_as_floats_in_yaml_1_1(
+    tmp_path: Path, resolution: float, origin: tuple[float, float, float]
+) -> None:
+    grid = OccupancyGrid(np.array([[0, OCCUPIED]], dtype=np.int8), resolution, origin)
+    path = save_map(grid, tmp_path / "m.yaml")
+    loaded = load_map(path)
+    assert (loaded.resolution, loaded.origin) == (resolution, origin)
+    assert np.array_equal(loaded.values, grid.values)
+    meta = yaml.safe_load(path.read_text())  # PyYAML's YAML 1.1, as rosparam reads it: 1e-05 would be text
+    assert meta["resolution"] == resolution
+    assert meta["origin"] == list(origin)
+
+
+def test_origin_with_exponent_numbers_is_read(tmp_path: Path) -> None:
+    path = _write(tmp_path, "image: m.pgm\nresolution: 5e-2\norigin: [5e-2, -1E+2, 0]\n", b"P5\n1 1\n255\n\x00")
+    assert load_map(path).origin == (0.05, -100.0, 0.0)
+
+
+@pytest.mark.parametrize("name", ["a: b", "#1", "[x]", "it's", "&a", "é", "line\nbreak"])
+def test_any_file_name_round_trips(tmp_path: Path, name: str) -> None:
+    grid = OccupancyGrid(np.array([[0, OCCUPIED]], dtype=np.int8), 0.05)
+    assert np.array_equal(load_map(save_map(grid, tmp_path / f"{name}.yaml")).values, grid.values)
+
+
+@pytest.mark.parametrize(("resolution", "origin"), [(1e-30, (0, 0, 0)), (2e3, (0, 0, 0)), (0.05, (1e300, 0, 0))])
+def test_a_grid_no_map_file_can_hold_is_not_written(
+    tmp_path: Path, resolution: float, origin: tuple[float, float, float]
+) -> None:
+    grid = OccupancyGrid(np.zeros((2, 2), dtype=np.int8), resolution, origin)
+    with pytest.raises(MapFileError, match=r"m\.yaml: (resolution|origin)"):
+        save_map(grid, tmp_path / "m.yaml")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_target_that_is_a_folder_leaves_both_files_as_they_were(tmp_path: Path) -> None:
+    (tmp_path / "d.yaml").mkdir()
+    (tmp_path / "d.pgm").write_bytes(b"earlier")
+    grid = OccupancyGrid(np.zeros((2, 2), dtype=np.int8), 0.05)
+    with pytest.raises(MapFileError, match=r"d\.yaml: cannot write map: not a regular file"):
+        save_map(grid, tmp_path / "d.yaml")
+    assert (tmp_path / "d.pgm").read_bytes() == b"earlier"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.pgm", "d.yaml"]
+
+
+def test_an_unwritable_folder_leaves_nothing_behind(tmp_path: Path) -> None:
+    (tmp_path / "d.pgm").write_bytes(b"earlier")
+    grid = OccupancyGrid(np.zeros((2, 2), dtype=np.int8), 0.05)
+    with pytest.raises(MapFileError, match=r"d\.yaml: cannot write map: "):
+        save_map(grid, tmp_path / "d.pgm" / "d.yaml")  # a file where the folder should be
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.pgm"]
 
 
 def test_image_top_row_is_the_largest_y_and_thresholds_apply(tmp_path: Path) -> None:
@@ -82,7 +139,12 @@ def test_shipped_course_map_is_what_the_rasteriser_makes_now() -> None:
         ("- just\n- a list\n", "expected a YAML mapping"),
         ("resolution: 0.05\norigin: [0, 0, 0]\n", "missing or empty key 'image'"),
         ("image: m.pgm\norigin: [0, 0, 0]\n", "missing key 'resolution'"),
-        ("image: m.pgm\nresolution: -1\norigin: [0, 0, 0]\n", "resolution must be positive"),
+        ("image: m.pgm\nresolution: -1\norigin: [0, 0, 0]\n", r"resolution must be 0.0001 \.\. 1000 m"),
+        ("image: m.pgm\nresolution: 1e-300\norigin: [0, 0, 0]\n", r"resolution must be 0.0001 \.\. 1000 m"),
+        ("image: m.pgm\nresolution: 1e300\norigin: [0, 0, 0]\n", r"resolution must be 0.0001 \.\. 1000 m"),
+        ("image: m.pgm\nresolution: 0.05\norigin: [1e300, 0, 0]\n", r"origin x and y must be within \+-1e\+07 m"),
+        ("image: m.pgm\nresolution: 0.05\norigin: [0, -2e7, 0]\n", r"origin x and y must be within \+-1e\+07 m"),
+        ('image: "\\0"\nresolution: 0.05\norigin: [0, 0, 0]\n', "key 'image' holds a NUL byte"),
         ("image: m.pgm\nresolution: 0.05\norigin: [0, 0]\n", "origin must be a list of three"),
         ("image: m.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nnegate: 2\n", "negate must be 0 or 1"),
         ("image: m.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nmode: fancy\n", "mode must be one of"),
@@ -102,7 +164,9 @@ def test_malformed_yaml_names_the_file_and_the_problem(tmp_path: Path, yaml_text
     [
         (b"P6\n1 1\n255\n\x00\x00\x00", "not a PGM image"),
         (b"P5\n4 4\n255\n\x00\x00", "truncated"),
-        (b"P2\n2 1\n255\n0 x\n", "must be integers"),
+        (b"P2\n2 1\n255\n0 x\n", "must be integers 0 .. 255, got 'x'"),
+        (b"P2\n2 1\n255\n0 -5\n", "must be integers 0 .. 255, got '-5'"),
+        (b"P2\n1 1\n255\n4294967296\n", "got '4294967296'"),  # would wrap to 0 in int32
         (b"P2\n2 1\n100\n0 200\n", "exceed maxval"),
         (b"", "not a PGM image"),
     ],
