@@ -43,6 +43,8 @@ def check_regular(path: Path, what: str, error: type[MrsNavError] = InvalidInput
         info = path.stat()
     except OSError as err:
         raise error(f"{path}: cannot read {what}: {err.strerror or err}") from err
+    except ValueError:  # the OS takes no NUL in a path; Python says so with a bare ValueError
+        raise error(f"{path!r}: cannot read {what}: the name holds a NUL byte") from None
     if not stat.S_ISREG(info.st_mode):
         raise error(f"{path}: cannot read {what}: not a regular file")
     return info.st_size

@@ -35,6 +35,8 @@ def test_a_file_over_the_limit_and_a_binary_file_are_refused(tmp_path: Path) -> 
         read_text(binary, 100, "config")
     with pytest.raises(InvalidInputError, match="missing: cannot read config: No such file"):
         read_text(tmp_path / "missing", 100, "config")
+    with pytest.raises(InvalidInputError, match="cannot read config: the name holds a NUL byte"):
+        read_text(tmp_path / "a\0b", 100, "config")
 
 
 def test_yaml_reads_exponents_without_a_dot_as_floats() -> None:
