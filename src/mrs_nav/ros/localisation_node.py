@@ -39,7 +39,7 @@ from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.localisation import BeamScan, LocalisationConfig, ParticleFilter, PoseEstimate
 from mrs_nav.ros.conversions import pose_from_msg, pose_msg
-from mrs_nav.ros.map_odom import MapOdomBroadcaster, known_frames, lookup_pose
+from mrs_nav.ros.map_odom import MapOdomBroadcaster, check_timing, known_frames, lookup_pose
 from mrs_nav.ros.navigation_conversions import grid_from_msg
 from mrs_nav.ros.params import private_param
 
@@ -62,12 +62,7 @@ class LocalisationNodeConfig:
     use_map_topic: bool = True
 
     def __post_init__(self) -> None:
-        for name in ("transform_tolerance", "transform_publish_period", "tf_wait"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0.0):
-                raise InvalidInputError(f"~{name}: must be >= 0, got {value}")
-        if self.transform_publish_period <= 0.0:
-            raise InvalidInputError("~transform_publish_period: must be > 0")
+        check_timing(self.transform_publish_period, transform_tolerance=self.transform_tolerance, tf_wait=self.tf_wait)
 
     @classmethod
     def from_params(cls) -> LocalisationNodeConfig:
