@@ -174,3 +174,13 @@ def test_a_scan_in_a_frame_tf_lacks_is_skipped_naming_the_frames_tf_has(node: No
     for frame in ("base_footprint", "base_scan", "odom"):
         assert frame in warning.rsplit("frames on tf:", 1)[1]
     assert not _has(node.estimates, scan.header.stamp.to_sec())
+
+
+def test_a_pose_estimate_off_the_map_is_refused_with_one_short_warning(node: NodeUnderTest) -> None:
+    # accepted, it put every particle at (1e300, 1e300): /amcl_pose then read 0, 0 with covariance 0
+    node.poses.publish(initial_pose_msg(node.rospy, Pose2D(1e300, 1e300, 0.0), (0.25, 0.25, 0.07)))
+    wait_for(lambda: any("ignoring initial pose" in m for m in node.logged), 30.0, "the warning")
+    warning = next(m for m in node.logged if "ignoring initial pose" in m)
+    assert "(1e+300, 1e+300) m lies off the map" in warning
+    assert len(warning) < 200
+    assert not any(m.startswith("localisation: initial pose (1e+300") for m in node.logged)

@@ -78,3 +78,38 @@ def test_a_command_line_parameter_the_parameter_server_cannot_hold_is_one_line(
     assert done.returncode == 1
     assert done.stderr.strip().splitlines() == [done.stderr.strip()]
     assert done.stderr.startswith(message)
+
+
+# rospy's timer divides by the period and a Duration of 1e300 s overflows: the map -> odom thread died and the
+# node ran on without it
+@pytest.mark.parametrize(
+    ("values", "match"),
+    [
+        ({"transform_publish_period": 1e-300}, r"~transform_publish_period: must lie in \[0.001, 10\] s, got 1e-300"),
+        ({"transform_publish_period": 1e300}, r"~transform_publish_period: .* got 1e\+300"),
+        ({"transform_tolerance": 1e300}, r"~transform_tolerance: must lie in \[0, 10\] s, got 1e\+300"),
+        ({"tf_wait": -1.0}, r"~tf_wait: must lie in \[0, 10\] s"),
+    ],
+)
+def test_localisation_tf_timing_out_of_range_is_refused_at_start_up(values: dict[str, float], match: str) -> None:
+    from mrs_nav.localisation import LocalisationConfig
+    from mrs_nav.ros.localisation_node import LocalisationNodeConfig
+
+    with pytest.raises(InvalidInputError, match=match):
+        LocalisationNodeConfig(filter=LocalisationConfig(), **values)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("values", "match"),
+    [
+        ({"transform_publish_period": 1e-300}, r"~transform_publish_period: must lie in \[0.001, 10\] s"),
+        ({"transform_publish_period": math.nan}, r"~transform_publish_period: .* got nan"),
+        ({"tf_wait": 1e300}, r"~tf_wait: must lie in \[0, 10\] s, got 1e\+300"),
+    ],
+)
+def test_slam_tf_timing_out_of_range_is_refused_at_start_up(values: dict[str, float], match: str) -> None:
+    from mrs_nav.ros.slam_node import SlamNodeConfig
+    from mrs_nav.slam import SlamConfig
+
+    with pytest.raises(InvalidInputError, match=match):
+        SlamNodeConfig(slam=SlamConfig(), **values)  # type: ignore[arg-type]

@@ -120,10 +120,31 @@ class ParticleFilter:
     # -- initialisation -----------------------------------------------------------------------------------------
 
     def set_pose(self, pose: Pose2D, covariance: npt.ArrayLike) -> None:
-        """Restart from a Gaussian about ``pose`` (rviz's 2D Pose Estimate); ``covariance`` is 3x3 (x, y, yaw)."""
+        """Restart from a Gaussian about ``pose`` (rviz's 2D Pose Estimate); ``covariance`` is 3x3 (x, y, yaw).
+
+        A pose off the map, or a spread wider than the map (x, y) or than a full turn (yaw), raises
+        InvalidInputError and keeps the current particles: such a cloud would lie mostly where no scan can be
+        scored; to search the whole map, use :meth:`global_localisation`.
+        """
         cov = np.asarray(covariance, dtype=np.float64)
         if cov.shape != (3, 3) or not np.all(np.isfinite(cov)) or np.any(np.diag(cov) < 0.0):
-            raise InvalidInputError(f"initial pose covariance must be a finite 3x3 matrix, got {cov.tolist()}")
+            raise InvalidInputError(
+                f"initial pose covariance must be a finite 3x3 matrix with variances >= 0, "
+                f"got {np.array2string(cov.ravel(), precision=3, separator=', ', max_line_width=1000, threshold=9)}"
+            )
+        xmin, ymin, xmax, ymax = self.grid.extent
+        if not (xmin <= pose.x <= xmax and ymin <= pose.y <= ymax):
+            raise InvalidInputError(
+                f"initial pose ({pose.x:.3g}, {pose.y:.3g}) m lies off the map "
+                f"(x {xmin:.3g}..{xmax:.3g}, y {ymin:.3g}..{ymax:.3g} m)"
+            )
+        sd_x, sd_y, sd_yaw = np.sqrt(np.diag(cov))
+        diagonal = math.hypot(xmax - xmin, ymax - ymin)
+        if max(sd_x, sd_y) > diagonal or sd_yaw > 2.0 * math.pi:
+            raise InvalidInputError(
+                f"initial pose covariance: std devs ({sd_x:.3g} m, {sd_y:.3g} m, {sd_yaw:.3g} rad) exceed the map's "
+                f"{diagonal:.3g} m diagonal or a full turn; use global localisation to search the whole map"
+            )
         n = self.config.max_particles
         # A covariance that is not positive semi-definite (rviz sends diagonal ones) is used by its diagonal.
         try:

@@ -39,7 +39,7 @@ from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.localisation import BeamScan, LocalisationConfig, ParticleFilter, PoseEstimate
 from mrs_nav.ros.conversions import pose_from_msg, pose_msg
-from mrs_nav.ros.map_odom import MapOdomBroadcaster, known_frames, lookup_pose
+from mrs_nav.ros.map_odom import MapOdomBroadcaster, check_timing, known_frames, lookup_pose
 from mrs_nav.ros.navigation_conversions import grid_from_msg
 from mrs_nav.ros.params import private_param
 
@@ -62,12 +62,7 @@ class LocalisationNodeConfig:
     use_map_topic: bool = True
 
     def __post_init__(self) -> None:
-        for name in ("transform_tolerance", "transform_publish_period", "tf_wait"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0.0):
-                raise InvalidInputError(f"~{name}: must be >= 0, got {value}")
-        if self.transform_publish_period <= 0.0:
-            raise InvalidInputError("~transform_publish_period: must be > 0")
+        check_timing(self.transform_publish_period, transform_tolerance=self.transform_tolerance, tf_wait=self.tf_wait)
 
     @classmethod
     def from_params(cls) -> LocalisationNodeConfig:
@@ -143,11 +138,16 @@ class LocalisationNode:
             rospy.logerr(f"localisation: ignoring map: {err}")
             return
         with self._lock:
-            if self._filter is not None:  # a new map: keep the current belief
+            # a new map keeps the current belief, or takes a pose given before any map, where it fits the map
+            belief = self._pending_pose
+            if self._filter is not None:
                 estimate = self._filter.estimate()
-                pf.set_pose(estimate.pose, estimate.covariance)
-            elif self._pending_pose is not None:
-                pf.set_pose(*self._pending_pose)
+                belief = (estimate.pose, estimate.covariance)
+            if belief is not None:
+                try:
+                    pf.set_pose(*belief)
+                except MrsNavError as err:
+                    rospy.logwarn(f"localisation: starting from the initial pose parameters: {err}")
             self._filter = pf
         rospy.loginfo(f"localisation: map {msg.info.width} x {msg.info.height} at {msg.info.resolution} m")
 
@@ -158,16 +158,16 @@ class LocalisationNode:
                 raise InvalidInputError(f"initial pose in frame {frame!r}, expected {self.config.global_frame_id!r}")
             pose, cov = pose_from_msg(msg.pose.pose), covariance_3x3(msg)
             with self._lock:
-                self._pending_pose = (pose, cov)
                 if self._filter is not None:
-                    self._filter.set_pose(pose, cov)
+                    self._filter.set_pose(pose, cov)  # checks it against the map first: a refused pose changes nothing
                     # rviz stamps the pose when it is given; an unstamped or future one counts from now
                     now = rospy.Time.now()
                     self._reset_stamp = min(msg.header.stamp, now) if not msg.header.stamp.is_zero() else now
+                self._pending_pose = (pose, cov)
         except MrsNavError as err:
             rospy.logwarn_throttle(5.0, f"localisation: ignoring initial pose: {err}")
             return
-        rospy.loginfo(f"localisation: initial pose ({pose.x:.2f}, {pose.y:.2f}, {pose.yaw:.2f})")
+        rospy.loginfo(f"localisation: initial pose ({pose.x:.4g}, {pose.y:.4g}, {pose.yaw:.2f})")
 
     def _on_global_localization(self, _request: EmptyRequest) -> EmptyResponse:
         with self._lock:

@@ -14,8 +14,32 @@ import rospy
 import tf2_ros
 import yaml
 
+from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.ros.conversions import pose_from_transform, transform_stamped
+
+#: The broadcast period's range, s. rospy's timer runs at ``1 / period``: a period of 0 or a denormal kills its
+#: thread with ZeroDivisionError and 1e300 with OverflowError, and the node ran on without map -> odom. At most
+#: tf's default cache of 10 s, or a listener with that cache loses the transform between two broadcasts; at
+#: least 1 ms (1 kHz), past which broadcasts only load the CPU and every listener.
+PUBLISH_PERIOD_S = (0.001, 10.0)
+#: How far ahead the transform is dated and how long a scan waits for tf, s, at most: tf's default cache of 10 s
+#: (a transform dated further ahead leaves such a listener nothing at the current time, and a scan waiting longer
+#: is stale), and within what a rospy Duration holds (1e300 s ended the broadcast thread with OverflowError).
+MAX_DELAY_S = 10.0
+
+
+def check_timing(transform_publish_period: float, **delays: float) -> None:
+    """Refuse a broadcast period outside :data:`PUBLISH_PERIOD_S` and a delay (by its parameter's name) outside
+    [0, :data:`MAX_DELAY_S`] s, with InvalidInputError naming the ``~`` parameter."""
+    low, high = PUBLISH_PERIOD_S
+    if not low <= transform_publish_period <= high:
+        raise InvalidInputError(
+            f"~transform_publish_period: must lie in [{low:g}, {high:g}] s, got {transform_publish_period:.3g}"
+        )
+    for name, value in delays.items():
+        if not 0.0 <= value <= MAX_DELAY_S:
+            raise InvalidInputError(f"~{name}: must lie in [0, {MAX_DELAY_S:g}] s, got {value:.3g}")
 
 
 class MapOdomBroadcaster:

@@ -31,7 +31,7 @@ from std_srvs.srv import Empty, EmptyRequest, EmptyResponse
 from mrs_nav.errors import MrsNavError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.ros.conversions import any_reading, pose_msg, scan_data
-from mrs_nav.ros.map_odom import MapOdomBroadcaster, known_frames, lookup_pose
+from mrs_nav.ros.map_odom import MapOdomBroadcaster, check_timing, known_frames, lookup_pose
 from mrs_nav.ros.navigation_conversions import publish_unless_shutdown
 from mrs_nav.ros.params import private_param
 from mrs_nav.slam import Slam, SlamConfig
@@ -52,6 +52,9 @@ class SlamNodeConfig:
     map_frame: str = "map"
     transform_publish_period: float = 0.05
     tf_wait: float = 0.2
+
+    def __post_init__(self) -> None:
+        check_timing(self.transform_publish_period, tf_wait=self.tf_wait)
 
     @classmethod
     def from_params(cls) -> SlamNodeConfig:

@@ -174,6 +174,39 @@ def test_bad_input_is_rejected_with_the_parameter_named() -> None:
         BeamScan(np.ones(3), np.zeros(4), 0.1, 3.5)
 
 
+@pytest.mark.parametrize(
+    ("values", "match"),
+    [
+        ({"max_particles": 2_000_000_000, "min_particles": 10}, r"need 1 <= min <= max <= 100,000"),
+        ({"laser_max_beams": 2_000_000_000}, r"laser_max_beams: must lie in \[2, 3600\]"),
+        ({"max_particles": 100_000, "laser_max_beams": 360}, r"100000 x 360 beam endpoints per update exceed"),
+        ({"odom_alpha3": 1e300}, r"odom_alpha3: must lie in \[0, 10\], got 1e\+300"),
+    ],
+)
+def test_sizes_and_alphas_past_their_stated_limits_are_refused(values: dict[str, float], match: str) -> None:
+    # before the limits, 2e9 beams or particles asked numpy for 15-45 GiB on the first scan or map
+    with pytest.raises(InvalidInputError, match=match):
+        LocalisationConfig(**values)  # type: ignore[arg-type]
+
+
+def test_a_pose_off_the_map_or_wider_than_it_is_refused_and_the_belief_kept() -> None:
+    _, grid = office()
+    pf = ParticleFilter(grid, LocalisationConfig(seed=0, max_particles=1000))
+    before = pf.particles.copy()
+    cov = np.diag([0.25, 0.25, 0.07])
+    with pytest.raises(InvalidInputError, match=r"initial pose \(1e\+300, 1e\+300\) m lies off the map") as far:
+        pf.set_pose(Pose2D(1e300, 1e300, 0.0), cov)
+    assert len(str(far.value)) < 120  # no 300-digit numbers
+    with pytest.raises(InvalidInputError, match="lies off the map"):
+        pf.set_pose(Pose2D(50.0, 50.0, 0.0), cov)
+    for variances in ([1e300, 0.25, 0.07], [0.25, 0.25, 1e300]):
+        with pytest.raises(InvalidInputError, match=r"std devs .* exceed the map's .* diagonal or a full turn"):
+            pf.set_pose(START, np.diag(variances))
+    assert np.array_equal(pf.particles, before)
+    with pytest.raises(InvalidInputError, match="lies off the map"):
+        ParticleFilter(grid, LocalisationConfig(initial_pose_x=50.0))
+
+
 def test_rooms_unknown_in_the_map_do_not_make_the_filter_lose_the_robot() -> None:
     # A map made by driving the corridors knows the corridor and little of the rooms: here every cell outside
     # the corridor ring (4 < |x| or |y| < 6) is unknown, and the robot drives into the south-west room and
