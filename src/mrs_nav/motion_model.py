@@ -28,9 +28,9 @@ from mrs_nav.geometry import Pose2D, wrap_angle
 DEFAULT_ALPHAS = (0.005, 0.002, 0.01, 0.0005)
 
 
-# An alpha of 100 is a standard deviation ten times the motion itself: no odometry is that bad, and larger ones
-# overflow the sampled poses to infinity.
-MAX_ALPHA = 100.0
+# An alpha of 10 is a standard deviation over three times the motion itself (AMCL's default is 0.2): odometry that
+# bad tells a filter nothing, and far larger ones throw poses past any map or overflow them to infinity.
+MAX_ALPHA = 10.0
 
 
 @dataclass(frozen=True)

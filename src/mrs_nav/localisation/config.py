@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from mrs_nav.errors import InvalidInputError
-from mrs_nav.motion_model import OdometryNoise
+from mrs_nav.motion_model import MAX_ALPHA, OdometryNoise
 
 #: Particles at most: 10 times the default and 20 times AMCL's 5000. An update holds about 40 bytes per particle
 #: and beam, so 100 000 particles at 60 beams take 0.7 s and 220 MB; far more would stall the node, not help it.
@@ -24,9 +24,6 @@ MAX_BEAMS = 3600
 #: Particle-beam pairs one update scores at most (``max_particles * laser_max_beams``): about 400 MB and a second
 #: of CPU; the default is 600 000.
 MAX_BEAM_ENDPOINTS = 10_000_000
-#: Odometry alphas at most: a spread over three times the motion itself (AMCL's default is 0.2); odometry that
-#: bad tells the filter nothing, and far larger alphas throw the particles past any map.
-MAX_ODOM_ALPHA = 10.0
 
 
 @dataclass(frozen=True)
@@ -83,8 +80,8 @@ class LocalisationConfig:
                 f"update exceed the limit of {MAX_BEAM_ENDPOINTS:,}; use fewer particles or beams"
             )
         for name in ("odom_alpha1", "odom_alpha2", "odom_alpha3", "odom_alpha4"):
-            if not 0.0 <= getattr(self, name) <= MAX_ODOM_ALPHA:
-                raise InvalidInputError(f"{name}: must lie in [0, {MAX_ODOM_ALPHA:g}], got {getattr(self, name):.3g}")
+            if not 0.0 <= getattr(self, name) <= MAX_ALPHA:
+                raise InvalidInputError(f"{name}: must lie in [0, {MAX_ALPHA:g}], got {getattr(self, name):.3g}")
         positive = (
             "kld_err",
             "kld_bin_xy",

@@ -83,7 +83,7 @@ def test_odometry_noise_is_seeded(excerpt, tmp_path):
         (["carmen2bag", "/dev/zero", "x.bag"], "/dev/zero: cannot read CARMEN log: not a regular file"),
         (
             ["carmen2bag", "{log}", "x.bag", "--odom", "synthetic", "--odom-noise", "1e308,0,0,0"],
-            "--odom-noise: odometry noise alphas must be in 0..100",
+            "--odom-noise: odometry noise alphas must be in 0..10",
         ),
         (
             ["replay", "{bag}", "--slam", "--relations", "/dev/zero"],
