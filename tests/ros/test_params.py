@@ -113,3 +113,20 @@ def test_slam_tf_timing_out_of_range_is_refused_at_start_up(values: dict[str, fl
 
     with pytest.raises(InvalidInputError, match=match):
         SlamNodeConfig(slam=SlamConfig(), **values)  # type: ignore[arg-type]
+
+
+def test_a_filter_parameter_written_with_an_exponent_is_read_as_a_number(ros_master: RosMaster) -> None:
+    # rosparam hands "1e+3" (no dot) over as text: it was refused as "expected a number"; now it is read and
+    # then held to the alphas' range
+    done = subprocess.run(
+        ["rosrun", "mrs_nav", "localisation", "_odom_alpha1:=1e+3", "__name:=amcl_exponent"],
+        env=ros_master.env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    fatal = [line for line in (done.stdout + done.stderr).splitlines() if "[FATAL]" in line]
+    assert done.returncode == 1
+    assert len(fatal) == 1
+    assert "odom_alpha1: must lie in [0, 10], got 1e+03" in fatal[0]

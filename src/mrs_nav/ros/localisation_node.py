@@ -43,7 +43,9 @@ from mrs_nav.ros.map_odom import MapOdomBroadcaster, check_timing, known_frames,
 from mrs_nav.ros.navigation_conversions import grid_from_msg
 from mrs_nav.ros.params import private_param
 
-_FILTER_PARAMS = tuple(f.name for f in dataclasses.fields(LocalisationConfig))
+# Each filter parameter with its default, so that it is read as the default's type: rosparam hands 1e-3 (an
+# exponent without a dot) over as text.
+_FILTER_PARAMS = {f.name: f.default for f in dataclasses.fields(LocalisationConfig)}
 _COV_INDEX = (0, 1, 5)  # x, y, yaw rows/columns of a 6x6 pose covariance
 _TIME_JUMP = 1.0  # s: the clock this much behind its last reading means sim time went back (a bag restarted)
 
@@ -67,7 +69,7 @@ class LocalisationNodeConfig:
     @classmethod
     def from_params(cls) -> LocalisationNodeConfig:
         """Read the ``~`` parameters once (defaults in config/localisation.yaml); bad values raise."""
-        values = {name: rospy.get_param(f"~{name}") for name in _FILTER_PARAMS if rospy.has_param(f"~{name}")}
+        values = {name: private_param(name, default) for name, default in _FILTER_PARAMS.items()}
         return cls(
             filter=LocalisationConfig.from_mapping(values),
             global_frame_id=private_param("global_frame_id", "map"),
