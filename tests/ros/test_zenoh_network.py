@@ -5,6 +5,7 @@ installed from a wheel into a fresh venv with nothing but its PyPI dependencies.
 from __future__ import annotations
 
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -326,4 +327,41 @@ def test_a_tls_endpoint_without_certificates_stops_the_node_with_one_line(
     assert code == 1
     assert len(fatal) == 1
     assert "needs transport.link.tls.listen_certificate and listen_private_key" in fatal[0]
+    assert "Traceback" not in log
+
+
+@pytest.mark.parametrize(
+    ("case", "fatal_says"),
+    [
+        ("fifo", "cannot read ~config_file: not a regular file"),  # used to block in open(), deaf to SIGTERM
+        ("device", "/dev/zero: cannot read ~config_file: not a regular file"),  # used to fill memory
+        ("binary", "cannot read ~config_file: not UTF-8 text"),
+        ("tiny period", "discovery_period 1e-300: expected 0.1 .. 60 s"),  # YAML 1.2's exponent form is read
+        ("huge period parameter", "discovery_period 1e+300: expected 0.1 .. 60 s"),  # text from the command line
+    ],
+)
+def test_an_unreadable_or_out_of_range_config_stops_the_node_with_one_line(
+    ros_master: RosMaster, tmp_path: Path, case: str, fatal_says: str
+) -> None:
+    path = tmp_path / "bridge.yaml"
+    extra = []
+    if case == "fifo":
+        os.mkfifo(path)
+    elif case == "device":
+        path = Path("/dev/zero")
+    elif case == "binary":
+        path.write_bytes(b"\x00\xff\xfe mode: peer")
+    elif case == "tiny period":
+        path.write_text("discovery_period: 1e-300\n")
+    else:
+        path.write_text("{}\n")
+        extra = ["_discovery_period:=1e300"]
+    cmd = [sys.executable, str(REPO / "scripts" / "zenoh_bridge"), "__name:=zb_bad", f"_config_file:={path}", *extra]
+    with process(cmd, ros_master.env, tmp_path / "zb_bad.log", grace=10.0) as bridge:
+        code = bridge.wait(timeout=60)
+    log = (tmp_path / "zb_bad.log").read_text()
+    fatal = [line for line in log.splitlines() if "[FATAL]" in line]
+    assert code == 1
+    assert len(fatal) == 1
+    assert fatal_says in fatal[0]
     assert "Traceback" not in log

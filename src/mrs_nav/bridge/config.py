@@ -12,6 +12,7 @@ TLS, authentication and the rest of Zenoh's transport settings come from a Zenoh
 
 from __future__ import annotations
 
+import ipaddress
 import math
 import re
 from collections.abc import Iterable, Mapping
@@ -29,13 +30,44 @@ DEFAULT_DENY = (r"/rosout(_agg)?", r"/clock")
 # often per topic (a person clicking goals) unless its rule says otherwise.
 DEFAULT_INBOUND_BYTES = 1024
 DEFAULT_INBOUND_RATE = 2.0
-_ENDPOINT = re.compile(r"^(tcp|udp|tls|quic|ws|unixsock-stream)/\S+$")
+# The files the bridge, router and monitor read (bridge YAML, Zenoh JSON5, PEM certificates, keys and CA bundles,
+# password dictionaries): a few KB each, and a whole public CA bundle is about 200 KB.
+MAX_FILE_BYTES = 1 << 20
+# discovery_period asks the master for the whole graph each time: more often than 10 times a second loads it for
+# nothing; a dead topic is withdrawn after 3 periods, so past a minute remote users see a vanished map for minutes.
+DISCOVERY_PERIOD_S = (0.1, 60.0)
+# retry_period is the longest wait between reconnections; Zenoh's first retry comes after 100 ms anyway.
+RETRY_PERIOD_S = (0.1, 3600.0)
+# Parameters that are numbers; a ROS parameter given on the command line (``_retry_period:=1e3``) arrives as
+# text when YAML 1.1 does not read it as a number.
+NUMBER_PARAMS = ("default_max_rate", "discovery_period", "retry_period")
+_ENDPOINT = re.compile(r"^(tcp|udp|tls|quic|ws|unixsock-stream)/([^?#\s]+)([?#]\S*)?$")
+_HOST_PORT = re.compile(r"^(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9]([A-Za-z0-9.-]*[A-Za-z0-9])?):([0-9]{1,5})$")
 
 
 def check_endpoint(endpoint: str) -> str:
-    """Return ``endpoint`` if it reads as a Zenoh locator (PROTO/ADDRESS), else raise InvalidInputError."""
-    if not _ENDPOINT.match(endpoint):
+    """Return ``endpoint`` if it reads as a Zenoh locator, PROTO/HOST:PORT (or unixsock-stream/PATH), optionally
+    followed by Zenoh's ``?metadata`` or ``#config``; else raise InvalidInputError naming what is wrong.
+
+    Zenoh itself only finds a bad address when the session opens, and for a connect endpoint not even then: it
+    retries it quietly, and a monitor would report that no bridge answered."""
+    found = _ENDPOINT.match(endpoint)
+    if not found:
         raise InvalidInputError(f"endpoint {endpoint!r}: expected PROTO/ADDRESS, e.g. tcp/127.0.0.1:7447")
+    if found[1] == "unixsock-stream":
+        return endpoint
+    address = _HOST_PORT.match(found[2])
+    if not address:
+        raise InvalidInputError(
+            f"endpoint {endpoint!r}: expected {found[1]}/HOST:PORT, HOST a name, an IPv4 address or an [IPv6] one"
+        )
+    if address[1].startswith("["):
+        try:
+            ipaddress.IPv6Address(address[1][1:-1])
+        except ValueError:
+            raise InvalidInputError(f"endpoint {endpoint!r}: {address[1]} is not an IPv6 address") from None
+    if int(address[3]) > 65535:
+        raise InvalidInputError(f"endpoint {endpoint!r}: port {address[3]} is not in 0..65535")
     return endpoint
 
 
@@ -125,9 +157,12 @@ class BridgeConfig:
             raise InvalidInputError("listen and connect are both empty: the bridge would reach nobody")
         if not robot_prefix(self.prefix, self.namespace) and self.layout is KeyLayout.MRS_NAV:
             raise InvalidInputError("prefix is empty: only the zenoh-bridge-ros1 layout works without one")
-        for name, value in (("discovery_period", self.discovery_period), ("retry_period", self.retry_period)):
-            if not math.isfinite(value) or value <= 0:
-                raise InvalidInputError(f"{name} {value!r}: expected a positive number of seconds")
+        for name, value, (low, high) in (
+            ("discovery_period", self.discovery_period, DISCOVERY_PERIOD_S),
+            ("retry_period", self.retry_period, RETRY_PERIOD_S),
+        ):
+            if not low <= value <= high:  # NaN fails too
+                raise InvalidInputError(f"{name} {value!r}: expected {low:g} .. {high:g} s")
         for pattern, rate in (*self.max_rates, ("default_max_rate", self.default_max_rate)):
             if not math.isfinite(rate) or rate < 0:
                 raise InvalidInputError(f"max rate of {pattern!r}: {rate!r} is not a finite rate >= 0 Hz")
@@ -195,7 +230,7 @@ class BridgeConfig:
         for key in ("listen", "connect", "operators"):
             if key in params:
                 kwargs[key] = _text_list(params[key], key)
-        for key in ("default_max_rate", "discovery_period", "retry_period"):
+        for key in NUMBER_PARAMS:
             if key in params:
                 kwargs[key] = _number(params[key], key)
         if "acl" in params:
@@ -236,7 +271,7 @@ def zenoh_settings(
     # Checked here, where every session's endpoints pass: Zenoh's own message for a malformed one is a Rust debug
     # dump naming its source files.
     listen, connect = [check_endpoint(e) for e in listen], [check_endpoint(e) for e in connect]
-    retry_ms = max(100, round(retry_period * 1000))
+    retry_ms = round(retry_period * 1000)
     return {
         "mode": mode,
         "listen/endpoints": listen,

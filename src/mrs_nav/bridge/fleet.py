@@ -61,7 +61,7 @@ class FleetMonitor:
         config_file: str = "",
     ) -> None:
         self.connect = connect
-        self.root = root.strip("/")
+        self.root = robot_prefix(root)
         self.timeout = timeout
         self.mode = mode
         self.config_file = config_file

@@ -17,7 +17,7 @@ import zenoh
 import zenoh.ext
 
 from mrs_nav.bridge.decoder import MessageDecoder, noetic_store
-from mrs_nav.bridge.keys import publish_key, status_key, topic_of_key, types_key
+from mrs_nav.bridge.keys import publish_key, robot_prefix, status_key, topic_of_key, types_key
 from mrs_nav.bridge.session import open_client_session
 from mrs_nav.bridge.wire import decode_attachment, decode_definition, decode_status, encoding_text, schema_of
 from mrs_nav.errors import InvalidInputError, MrsNavError
@@ -79,7 +79,9 @@ class RemoteMonitor:
         config_file: str = "",
     ) -> None:
         self.connect = connect
-        self.prefix = prefix.strip("/")
+        self.prefix = robot_prefix(prefix)
+        if not self.prefix:
+            raise InvalidInputError("key prefix '': the monitor reads the mrs_nav key layout, which needs one")
         self.timeout = timeout
         self.mode = mode
         self.config_file = config_file

@@ -4,16 +4,43 @@ optional Zenoh JSON5 file that brings TLS, authentication and any other Zenoh se
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
 import zenoh
 
-from mrs_nav.bridge.config import zenoh_settings
+from mrs_nav.bridge.config import MAX_FILE_BYTES, zenoh_settings
 from mrs_nav.errors import InvalidInputError
+from mrs_nav.textfiles import read_regular, read_text
 
 _SECURE = ("tls/", "quic/")
+_TLS_FILES = ("root_ca_certificate", "listen_certificate", "listen_private_key", "connect_certificate",
+              "connect_private_key")  # fmt: skip
+# What zenoh-python's errors carry besides the message: the Rust source line that raised it, and the parsers'
+# debug renderings of where in the file the problem is.
+_RUST_SOURCE = re.compile(r"\s+at \S+\.rs:\d+\.?$")
+_SERDE_JSON5 = re.compile(
+    r'Message \{ msg: "((?:[^"\\]|\\.)*)"(?:, location: Some\(Location \{ line: (\d+), column: (\d+))?'
+)
+_SERDE_YAML = re.compile(r'Error\("((?:[^"\\]|\\.)*)", line: (\d+), column: (\d+)\)')
+_PEST = re.compile(r"^\s*--> (\d+):(\d+)\n.*\n\s*= (.*)$", re.DOTALL)
+_SINGLE = re.compile(r"Single\(([^()]*)\)")
+
+
+def zenoh_message(err: zenoh.ZError) -> str:
+    """A Zenoh error as one readable line: the parser's message with its line and column, without the Rust
+    source location and debug wrappers zenoh-python passes through."""
+    text = _RUST_SOURCE.sub("", str(err))
+    pest = _PEST.match(text)
+    serde = _SERDE_JSON5.search(text) or _SERDE_YAML.search(text)
+    if pest:
+        text = f"line {pest[1]}, column {pest[2]}: {pest[3]}"
+    elif serde:
+        message = re.sub(r"\\(.)", r"\1", serde[1])
+        text = f"line {serde[2]}, column {serde[3]}: {message}" if serde[2] else message
+    return " ".join(_SINGLE.sub(r"\1", text).split())
 
 
 def zenoh_config(settings: Mapping[str, Any], config_file: str = "") -> zenoh.Config:
@@ -21,25 +48,26 @@ def zenoh_config(settings: Mapping[str, Any], config_file: str = "") -> zenoh.Co
     (path -> JSON value) on top. Raise InvalidInputError naming the file or the setting when it cannot work,
     in particular a TLS endpoint without the certificates Zenoh would otherwise ask for every few seconds."""
     if config_file:
-        path = Path(config_file)
-        if not path.is_file():
-            raise InvalidInputError(f"zenoh_config {config_file}: no such file")
+        # Read here first: a FIFO or a device named as the file would block or fill memory inside Zenoh.
+        read_text(Path(config_file), MAX_FILE_BYTES, "zenoh_config")
         try:
-            config = zenoh.Config.from_file(str(path))
+            config = zenoh.Config.from_file(config_file)
         except zenoh.ZError as err:
-            raise InvalidInputError(f"zenoh_config {config_file}: {err}") from None
+            raise InvalidInputError(f"zenoh_config {config_file}: {zenoh_message(err)}") from None
     else:
         config = zenoh.Config()
     for key, value in settings.items():
         try:
             config.insert_json5(key, json.dumps(value))
         except zenoh.ZError as err:
-            raise InvalidInputError(f"zenoh setting {key}: {err}") from None
-    _check_tls(config, config_file)
+            raise InvalidInputError(f"zenoh setting {key}: {zenoh_message(err)}") from None
+    _check_security(config, config_file)
     return config
 
 
-def _check_tls(config: zenoh.Config, config_file: str) -> None:
+def _check_security(config: zenoh.Config, config_file: str) -> None:
+    """TLS endpoints need their certificates; the certificate, key and password files must be readable."""
+
     def endpoints(kind: str) -> list[str]:
         value = json.loads(config.get_json(f"{kind}/endpoints"))
         # A router or peer may give endpoints per mode: {"router": [...], "peer": [...]}.
@@ -59,10 +87,17 @@ def _check_tls(config: zenoh.Config, config_file: str) -> None:
             raise InvalidInputError(
                 f"connect endpoint {endpoint} needs transport.link.tls.root_ca_certificate ({source} sets none)"
             )
-    for key in ("root_ca_certificate", "listen_certificate", "listen_private_key", "connect_certificate",
-                "connect_private_key"):  # fmt: skip
-        if tls.get(key) and not Path(tls[key]).is_file():
-            raise InvalidInputError(f"transport.link.tls.{key} {tls[key]}: no such file ({source})")
+    for key in _TLS_FILES:
+        if tls.get(key):
+            # Zenoh reads these when a link opens and, failing, only retries: the peer would never learn why.
+            pem = read_regular(Path(tls[key]), MAX_FILE_BYTES, f"transport.link.tls.{key} ({source})")
+            if b"-----BEGIN " not in pem:
+                raise InvalidInputError(
+                    f"{tls[key]}: transport.link.tls.{key} is not PEM, no -----BEGIN line ({source})"
+                )
+    dictionary = json.loads(config.get_json("transport/auth/usrpwd/dictionary_file"))
+    if dictionary:
+        read_text(Path(dictionary), MAX_FILE_BYTES, f"transport.auth.usrpwd.dictionary_file ({source})")
 
 
 def refuse_lowlatency(config: zenoh.Config, config_file: str = "") -> None:
@@ -87,7 +122,7 @@ def open_session(settings: Mapping[str, Any], config_file: str = "") -> zenoh.Se
     try:
         return zenoh.open(config)
     except zenoh.ZError as err:
-        raise InvalidInputError(f"cannot open a Zenoh session ({settings.get('mode')}): {err}") from None
+        raise InvalidInputError(f"cannot open a Zenoh session ({settings.get('mode')}): {zenoh_message(err)}") from None
 
 
 def open_client_session(connect: Iterable[str], mode: str = "peer", config_file: str = "") -> zenoh.Session:

@@ -25,7 +25,9 @@ class RobotView:
 
 
 def draw_snapshot(out: Path, views: Mapping[str, RobotView]) -> Path:
-    """Write ``out`` (PNG): one panel per robot, side by side, titled with its name when there are several.
+    """Write ``out`` as PNG whatever its suffix (matplotlib would otherwise add ``.png`` to a name without one,
+    or refuse another suffix after the whole run): one panel per robot, side by side, titled with its name when
+    there are several.
 
     Grid cells: unknown (-1) grey, free white, occupied black, shaded by occupancy probability; the image is
     placed at the grid's origin with its resolution (m/cell), so everything is in that robot's map frame, metres
@@ -43,7 +45,7 @@ def draw_snapshot(out: Path, views: Mapping[str, RobotView]) -> Path:
     for ax in axes[len(views) :]:
         ax.set_axis_off()
     out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out)
+    fig.savefig(out, format="png")
     return out
 
 

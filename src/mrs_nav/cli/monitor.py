@@ -15,7 +15,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from mrs_nav.cli.common import print_json
+from mrs_nav.cli.common import check_writable, print_json
 from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.limits import MAX_BENCH_S
 from mrs_nav.options import number_option, parse_floats
@@ -69,7 +69,9 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("--period", type=_PERIOD, default=0.5, metavar="S", help="redraw period, s (default 0.5)")
     parser.add_argument("--json", action="store_true", help="print the final dashboard as one JSON object")
-    parser.add_argument("--snapshot", type=Path, default=None, metavar="PNG", help="draw map, robot and path here")
+    parser.add_argument(
+        "--snapshot", type=Path, default=None, metavar="PNG", help="draw map, robot and path into this PNG file"
+    )
     parser.add_argument("--send-goal", default=None, metavar="X,Y,YAW", help="ask the bridge to publish this goal")
     parser.add_argument("--frame", default="map", help="frame of --send-goal (default: map)")
     parser.add_argument("--timeout", type=_TIMEOUT, default=2.0, metavar="S", help="query timeout, s (default 2)")
@@ -83,6 +85,8 @@ def run(args: argparse.Namespace) -> int:
     if args.robot is not None and not args.fleet:
         raise InvalidInputError("--robot names a robot of a fleet: add --fleet (or give its --prefix alone)")
     goal = parse_floats(args.send_goal, 3, "--send-goal") if args.send_goal else None
+    if args.snapshot is not None:
+        check_writable(args.snapshot, "--snapshot")
     connect = [e.strip() for item in args.connect for e in item.split(",") if e.strip()]
     if args.fleet:
         return _run_fleet(args, connect, goal)

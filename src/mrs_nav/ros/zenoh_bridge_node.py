@@ -30,12 +30,11 @@ from typing import Any
 
 import rosgraph
 import rospy
-import yaml
 import zenoh
 import zenoh.ext
 from roslib.message import get_message_class
 
-from mrs_nav.bridge.config import BridgeConfig, InboundRule
+from mrs_nav.bridge.config import MAX_FILE_BYTES, NUMBER_PARAMS, BridgeConfig, InboundRule
 from mrs_nav.bridge.inbound import InboundValidator
 from mrs_nav.bridge.keys import (
     KeyLayout,
@@ -58,6 +57,8 @@ from mrs_nav.bridge.wire import (
     stamp_attachment,
 )
 from mrs_nav.errors import MrsNavError
+from mrs_nav.ros.params import private_param
+from mrs_nav.textfiles import load_yaml, read_text
 
 # Messages dropped by the inbound checks are logged at most once per this many seconds (with a count).
 DROP_LOG_PERIOD = 5.0
@@ -69,14 +70,15 @@ SUSPECT_TICKS = 3
 def load_config() -> BridgeConfig:
     """Private parameters, overridden by the YAML file named in ``~config_file`` when given."""
     params: dict[str, Any] = dict(rospy.get_param("~", {}))
+    for key in NUMBER_PARAMS:
+        if key in params:  # set, so the default 0.0 is never returned; the config checks the range
+            params[key] = private_param(key, 0.0)
     path = str(params.pop("config_file", "") or "")
     if path:
-        try:
-            loaded = yaml.safe_load(Path(path).read_text(encoding="utf-8")) or {}
-        except (OSError, yaml.YAMLError) as err:
-            raise MrsNavError(f"~config_file {path}: {err}") from None
+        where = f"~config_file {path}"
+        loaded = load_yaml(read_text(Path(path), MAX_FILE_BYTES, "~config_file"), where) or {}
         if not isinstance(loaded, Mapping):
-            raise MrsNavError(f"~config_file {path}: expected a mapping of parameters")
+            raise MrsNavError(f"{where}: expected a mapping of parameters")
         params.update(loaded)
     if not params.get("namespace"):
         params["namespace"] = rospy.get_namespace().strip("/")  # a bridge in /robot1 keys mrs_nav/robot1/...

@@ -83,6 +83,14 @@ def test_a_bridge_in_a_namespace_names_its_robots_topics_as_the_robot_does() -> 
         ({"inbound": ["/move_base_simple/goal", "/move_base_simple/goal"]}, "twice"),
         ({"inbound": [{"topic": "nope", "type": "a/B"}]}, "topic"),
         ({"discovery_period": 0}, "discovery_period"),
+        ({"discovery_period": 1e-300}, r"discovery_period 1e-300: expected 0\.1 \.\. 60 s"),
+        ({"discovery_period": 1e300}, r"discovery_period 1e\+300: expected 0\.1 \.\. 60 s"),
+        ({"retry_period": 1.0e300}, r"retry_period 1e\+300: expected 0\.1 \.\. 3600 s"),
+        ({"retry_period": float("nan")}, "retry_period nan"),
+        ({"connect": ["tcp/127.0.0.1:99999"]}, "port 99999 is not in 0..65535"),
+        ({"connect": ["tcp/[::1"]}, r"endpoint 'tcp/\[::1': expected tcp/HOST:PORT"),
+        ({"connect": ["tls/[1::2::3]:7447"]}, r"\[1::2::3\] is not an IPv6 address"),
+        ({"listen": ["tcp/robot"]}, "expected tcp/HOST:PORT"),
         ({"lisen": ["tcp/127.0.0.1:1"]}, "unknown"),
         ({"layout": "dds"}, "layout"),
         ({"prefix": "a b"}, "prefix"),
@@ -91,6 +99,12 @@ def test_a_bridge_in_a_namespace_names_its_robots_topics_as_the_robot_does() -> 
 def test_bad_configuration_is_one_clear_error(params: dict[str, object], match: str) -> None:
     with pytest.raises(InvalidInputError, match=match):
         BridgeConfig.from_mapping(params)
+
+
+def test_endpoints_zenoh_accepts_pass() -> None:
+    endpoints = ["tcp/[::1]:7447", "tcp/robot-1.local:7447", "udp/127.0.0.1:0", "tcp/127.0.0.1:7447#iface=lo",
+                 "tls/10.0.0.2:7447?prio=1", "unixsock-stream//tmp/zenoh.sock"]  # fmt: skip
+    assert BridgeConfig.from_mapping({"connect": endpoints}).connect == tuple(endpoints)
 
 
 def test_rate_limiter_holds_the_mean_rate_under_jittery_input() -> None:

@@ -133,6 +133,14 @@ def test_monitor_discovers_decodes_and_gets_the_latched_map_late(
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.parametrize("name", ["robot", "robot.jpg"])
+def test_the_snapshot_is_a_png_written_under_exactly_the_name_given(name: str, tmp_path: Path) -> None:
+    out = draw_snapshot(tmp_path / name, {"mrs_nav": RobotView(grid())})
+    assert out == tmp_path / name
+    assert [p.name for p in tmp_path.iterdir()] == [name]
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
 def test_send_goal_without_a_bridge_says_nobody_answered(bridge: tuple[FakeBridge, str]) -> None:
     _, endpoint = bridge
     with RemoteMonitor([endpoint], timeout=0.5) as monitor:

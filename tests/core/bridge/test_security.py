@@ -5,6 +5,7 @@ settings :class:`BridgeConfig` gives the node, and remote sessions connect in cl
 from __future__ import annotations
 
 import json
+import os
 import re
 import time
 from collections.abc import Iterator
@@ -197,12 +198,52 @@ def test_a_tls_endpoint_without_certificates_is_one_clear_error(tmp_path: Path) 
     config = BridgeConfig.from_mapping({"listen": ["tls/127.0.0.1:7447"]})
     with pytest.raises(InvalidInputError, match=r"needs transport\.link\.tls\.listen_certificate and listen_priv"):
         zenoh_config(config.zenoh_settings({}), config.zenoh_config)
-    with pytest.raises(InvalidInputError, match="no such file"):
+    with pytest.raises(InvalidInputError, match="cannot read zenoh_config: No such file"):
         zenoh_config(config.zenoh_settings({}), str(tmp_path / "missing.json5"))
-    bad = tmp_path / "bad.json5"
-    bad.write_text("{transport: {link: {tls: {root_ca_certificate: 3}}}")
-    with pytest.raises(InvalidInputError, match=re.escape(str(bad))):
-        zenoh_config(config.zenoh_settings({}), str(bad))
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("{transport: {link: {tls: {root_ca_certificate: 3}}}}", "line 1, column 48: invalid type: integer `3`"),
+        ("{ mode: 5 }", "line 1, column 9: invalid type: integer `5`, expected either 'router', 'peer' or 'client'"),
+        ("{\n  mode: 'peer',,\n}", "line 2, column 16: expected identifier or string"),
+        ("{ transport: { link: { tls: { root_ca_certificate: '/dev/zero' } } } }", "not a regular file"),
+        ("{ transport: { auth: { usrpwd: { dictionary_file: '/dev/zero' } } } }", "/dev/zero: cannot read transport"),
+    ],
+)
+def test_a_malformed_zenoh_file_is_one_readable_line_naming_it(text: str, match: str, tmp_path: Path) -> None:
+    path = tmp_path / "bad.json5"
+    path.write_text(text)
+    with pytest.raises(InvalidInputError) as raised:
+        zenoh_config({}, str(path))
+    message = str(raised.value)
+    assert str(path) in message
+    assert match in message
+    assert ".rs:" not in message
+    assert "Location" not in message
+    assert "\n" not in message
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device", "binary"])
+def test_a_zenoh_file_that_is_no_text_file_is_refused_before_zenoh_reads_it(kind: str, tmp_path: Path) -> None:
+    path = tmp_path / "zenoh.json5"
+    if kind == "fifo":
+        os.mkfifo(path)  # Zenoh would block opening it, for ever
+    elif kind == "device":
+        path = Path("/dev/zero")  # Zenoh would read it until memory runs out
+    else:
+        path.write_bytes(b"{\xff\xfe}")
+    with pytest.raises(InvalidInputError, match=rf"{re.escape(str(path))}: cannot read zenoh_config: not"):
+        zenoh_config({}, str(path))
+
+
+def test_a_certificate_that_is_not_pem_is_refused_before_connecting(pki: Pki, tmp_path: Path) -> None:
+    garbage = tmp_path / "ca.pem"
+    garbage.write_text("garbage\n")
+    config = client_file(tmp_path, pki, "viewer", "view-secret", ca=garbage)
+    with pytest.raises(InvalidInputError, match=rf"{re.escape(str(garbage))}: transport.link.tls.root_ca_certificate"):
+        open_client_session([f"tls/127.0.0.1:{free_port()}"], config_file=config)
 
 
 LOWLATENCY = {"transport": {"unicast": {"lowlatency": True, "qos": {"enabled": False}}}}

@@ -8,6 +8,7 @@ import signal
 import subprocess
 import sys
 import threading
+from pathlib import Path
 
 import pytest
 
@@ -45,9 +46,28 @@ def test_clients_of_the_router_reach_each_other_and_sigterm_stops_it() -> None:
     assert err.strip() == "zenoh router stopped"
 
 
-@pytest.mark.parametrize("endpoint", ["127.0.0.1:7447", "tcp/", ""])
+@pytest.mark.parametrize("endpoint", ["127.0.0.1:7447", "tcp/", "", "tcp/127.0.0.1:99999", "tcp/[::1"])
 def test_a_bad_endpoint_is_one_error_line(endpoint: str, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["router", "--listen", endpoint]) == 1
     err = capsys.readouterr().err.strip()
     assert err.startswith("ERROR: ")
     assert "\n" not in err
+    assert ".rs:" not in err
+
+
+@pytest.mark.parametrize(
+    ("content", "match"),
+    [("{ mode: 5 }", "line 1, column 9: invalid type: integer `5`"), (b"\xff", "cannot read zenoh_config: not UTF-8")],
+)
+def test_a_bad_zenoh_config_is_one_readable_error_line(
+    content: str | bytes, match: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "router.json5"
+    path.write_bytes(content if isinstance(content, bytes) else content.encode())
+    assert main(["router", "--listen", f"tcp/127.0.0.1:{free_port()}", "--zenoh-config", str(path)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("ERROR: ")
+    assert str(path) in err
+    assert match in err
+    assert "\n" not in err
+    assert ".rs:" not in err
