@@ -26,10 +26,14 @@ def check_writable(path: Path, what: str, *, folder: bool = False) -> Path:
     target = path if folder else path.parent
     if not folder and path.is_dir():
         raise InvalidInputError(f"{what}: {path} is a folder, expected a file name")
+    if not folder and (path.is_fifo() or path.is_socket()):  # writing would wait for a reader, maybe for ever
+        raise InvalidInputError(f"{what}: {path} is a FIFO or a socket, expected a file name")
     try:
         target.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=target):
             pass
+    except (FileExistsError, NotADirectoryError):
+        raise InvalidInputError(f"{what}: cannot write into {target}: a file is in the way of that folder") from None
     except OSError as err:
         raise InvalidInputError(f"{what}: cannot write into {target}: {err.strerror}") from None
     return path
