@@ -82,17 +82,18 @@ class LocalisationConfig:
         for name in ("odom_alpha1", "odom_alpha2", "odom_alpha3", "odom_alpha4"):
             if not 0.0 <= getattr(self, name) <= MAX_ALPHA:
                 raise InvalidInputError(f"{name}: must lie in [0, {MAX_ALPHA:g}], got {getattr(self, name):.3g}")
-        positive = (
-            "kld_err",
-            "kld_bin_xy",
-            "kld_bin_yaw",
-            "laser_sigma_hit",
-            "laser_sigma_max",
-            "laser_likelihood_max_dist",
-        )
-        for name in positive:
+        for name in ("kld_err", "laser_sigma_hit", "laser_sigma_max"):
             if getattr(self, name) <= 0.0:
                 raise InvalidInputError(f"{name}: must be > 0, got {getattr(self, name)}")
+        for name, low, high in (
+            # A bin key holds 21 bits of cells each way: 1 cm bins span +-10 km; finer ones overflow it.
+            ("kld_bin_xy", 0.01, 100.0),
+            ("kld_bin_yaw", 0.001, 2.0 * math.pi),
+            # Distances are clipped there; AMCL's default is 2 m, and squares of far larger ones overflow.
+            ("laser_likelihood_max_dist", 0.01, 100.0),
+        ):
+            if not low <= getattr(self, name) <= high:
+                raise InvalidInputError(f"{name}: must lie in [{low:g}, {high:g}], got {getattr(self, name):.3g}")
         non_negative = (
             "update_min_d",
             "update_min_a",

@@ -25,7 +25,7 @@ from scipy.special import logsumexp
 from scipy.stats import norm
 
 from mrs_nav.errors import InvalidInputError
-from mrs_nav.geometry import FloatArray, Pose2D, wrap_angle, wrap_angles
+from mrs_nav.geometry import FloatArray, Pose2D, format_point, wrap_angle, wrap_angles
 from mrs_nav.localisation.config import LocalisationConfig
 from mrs_nav.localisation.likelihood_field import LikelihoodField
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
@@ -33,6 +33,8 @@ from mrs_nav.motion_model import OdometryNoise, decompose
 
 _CLUSTER_RADIUS = 0.75  # m: particles this close to the heaviest bin's mean make the pose estimate
 _UNCERTAIN_SHARE = 0.5  # a dominant mode with less of the weight than this leaves the pose unknown
+# Odometry 10,000 km from its origin is a broken message (a tf of 1e300): the motion model's squares overflow.
+MAX_ODOM_M = 1e7
 
 
 @dataclass(frozen=True, eq=False)
@@ -256,6 +258,10 @@ class ParticleFilter:
         once after :meth:`set_pose` / :meth:`global_localisation`.
         """
         c = self.config
+        if not (abs(odom.x) <= MAX_ODOM_M and abs(odom.y) <= MAX_ODOM_M and math.isfinite(odom.yaw)):
+            raise InvalidInputError(
+                f"odometry pose {format_point(odom.x, odom.y)} is not within {MAX_ODOM_M:g} m of its origin"
+            )
         if self._last_odom is None:
             self._last_odom = odom
             if not self._force_update:

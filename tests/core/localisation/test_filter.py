@@ -181,6 +181,9 @@ def test_bad_input_is_rejected_with_the_parameter_named() -> None:
         ({"laser_max_beams": 2_000_000_000}, r"laser_max_beams: must lie in \[2, 3600\]"),
         ({"max_particles": 100_000, "laser_max_beams": 360}, r"100000 x 360 beam endpoints per update exceed"),
         ({"odom_alpha3": 1e300}, r"odom_alpha3: must lie in \[0, 10\], got 1e\+300"),
+        # an invalid cast and an overflow warning on every update, before these ranges
+        ({"kld_bin_xy": 1e-300}, r"kld_bin_xy: must lie in \[0.01, 100\], got 1e-300"),
+        ({"laser_likelihood_max_dist": 1e300}, r"laser_likelihood_max_dist: must lie in \[0.01, 100\]"),
     ],
 )
 def test_sizes_and_alphas_past_their_stated_limits_are_refused(values: dict[str, float], match: str) -> None:
@@ -205,6 +208,18 @@ def test_a_pose_off_the_map_or_wider_than_it_is_refused_and_the_belief_kept() ->
     assert np.array_equal(pf.particles, before)
     with pytest.raises(InvalidInputError, match="lies off the map"):
         ParticleFilter(grid, LocalisationConfig(initial_pose_x=50.0))
+
+
+def test_odometry_a_googol_away_is_refused_and_the_belief_kept() -> None:
+    # a tf of 1e300 overflowed the motion model's squares (OverflowError out of update)
+    _, grid = office()
+    pf = ParticleFilter(grid, LocalisationConfig(seed=0, max_particles=1000))
+    scan = BeamScan(np.full(60, 1.0), np.linspace(-math.pi, math.pi, 60, endpoint=False), 0.1, 3.5)
+    pf.update(Pose2D(0.0, 0.0, 0.0), scan)
+    before = pf.particles.copy()
+    with pytest.raises(InvalidInputError, match=r"odometry pose \(1e\+300, 0.00\) is not within 1e\+07 m"):
+        pf.update(Pose2D(1e300, 0.0, 0.0), scan)
+    assert np.array_equal(pf.particles, before)
 
 
 def test_rooms_unknown_in_the_map_do_not_make_the_filter_lose_the_robot() -> None:
