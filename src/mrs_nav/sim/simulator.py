@@ -83,6 +83,17 @@ class ContactStats:
 CONTACT_GAP = 0.25  # s without touching before a new touch counts as a new contact event
 
 
+@dataclass
+class _StepClock:
+    """Sim time as the count of physics steps taken at ``rate`` Hz; calling it gives the time (s)."""
+
+    rate: float
+    steps: int = 0
+
+    def __call__(self) -> float:
+        return self.steps / self.rate
+
+
 class SimulatedRobot:
     """One robot of a :class:`MultiRobotSimulator`: its commands, wheel odometry, laser and contacts."""
 
@@ -242,22 +253,25 @@ class MultiRobotSimulator:
                 raise InvalidInputError(f"start ({start.x:g}, {start.y:g}) is more than {MAX_COORDINATE_M:g} m out")
         self._physics = Physics(world, self.config.robot, starts, names)
         seeds = np.random.SeedSequence(self.config.seed).spawn(2 * len(starts))
+        # The robots read the time from this counter, not from the simulator: a closure over the simulator would
+        # make every simulator a reference cycle, freed by the cycle collector, which may clear pyode's objects
+        # before their own deallocation runs (an ignored TypeError in JointGroup.__dealloc__).
+        self._clock = _StepClock(self.config.physics_rate)
         self.robots: tuple[SimulatedRobot, ...] = tuple(
             SimulatedRobot(
-                self._physics, i, start, self.config, seeds=(seeds[2 * i], seeds[2 * i + 1]), clock=lambda: self.time
+                self._physics, i, start, self.config, seeds=(seeds[2 * i], seeds[2 * i + 1]), clock=self._clock
             )
             for i, start in enumerate(starts)
         )
-        self._steps = 0
 
     @property
     def time(self) -> float:
         """Sim time (s) since the start."""
-        return self._steps / self.config.physics_rate
+        return self._clock()
 
     @property
     def steps(self) -> int:
-        return self._steps
+        return self._clock.steps
 
     def add_box(self, box: Box) -> None:
         """Put a static box into the world at run time (an obstacle the map does not have); it joins
@@ -273,8 +287,8 @@ class MultiRobotSimulator:
         dt = self.config.dt
         rates = [robot.wheel_rates(dt) for robot in self.robots]
         touched = self._physics.step(rates, dt)
-        self._steps += 1
-        return [robot.after_step(t, self._steps) for robot, t in zip(self.robots, touched, strict=True)]
+        self._clock.steps += 1
+        return [robot.after_step(t, self._clock.steps) for robot, t in zip(self.robots, touched, strict=True)]
 
 
 class Simulator:
