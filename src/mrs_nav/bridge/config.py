@@ -36,6 +36,9 @@ MAX_FILE_BYTES = 1 << 20
 # discovery_period asks the master for the whole graph each time: more often than 10 times a second loads it for
 # nothing; a dead topic is withdrawn after 3 periods, so past a minute remote users see a vanished map for minutes.
 DISCOVERY_PERIOD_S = (0.1, 60.0)
+# zenoh-bridge-ros1 forgets a topic after 3 of its 1 s discovery periods without a beacon, and ours go out once
+# per discovery_period.
+PLUGIN_FORGETS_S = 3.0
 # retry_period is the longest wait between reconnections; Zenoh's first retry comes after 100 ms anyway.
 RETRY_PERIOD_S = (0.1, 3600.0)
 # Parameters that are numbers; a ROS parameter given on the command line (``_retry_period:=1e3``) arrives as
@@ -163,6 +166,11 @@ class BridgeConfig:
         ):
             if not low <= value <= high:  # NaN fails too
                 raise InvalidInputError(f"{name} {value!r}: expected {low:g} .. {high:g} s")
+        if self.layout is KeyLayout.ZENOH_BRIDGE_ROS1 and self.discovery_period >= PLUGIN_FORGETS_S:
+            raise InvalidInputError(
+                f"discovery_period {self.discovery_period!r}: with the zenoh-bridge-ros1 layout it must be below "
+                f"{PLUGIN_FORGETS_S:g} s, or remote zenoh-bridge-ros1 instances forget our topics between beacons"
+            )
         for pattern, rate in (*self.max_rates, ("default_max_rate", self.default_max_rate)):
             if not math.isfinite(rate) or rate < 0:
                 raise InvalidInputError(f"max rate of {pattern!r}: {rate!r} is not a finite rate >= 0 Hz")

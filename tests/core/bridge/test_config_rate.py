@@ -86,6 +86,7 @@ def test_a_bridge_in_a_namespace_names_its_robots_topics_as_the_robot_does() -> 
         ({"discovery_period": 1e-300}, r"discovery_period 1e-300: expected 0\.1 \.\. 60 s"),
         ({"discovery_period": 1e300}, r"discovery_period 1e\+300: expected 0\.1 \.\. 60 s"),
         ({"retry_period": 1.0e300}, r"retry_period 1e\+300: expected 0\.1 \.\. 3600 s"),
+        ({"layout": "zenoh-bridge-ros1", "prefix": "", "discovery_period": 3.0}, "must be below 3 s"),
         ({"retry_period": float("nan")}, "retry_period nan"),
         ({"connect": ["tcp/127.0.0.1:99999"]}, "port 99999 is not in 0..65535"),
         ({"connect": ["tcp/[::1"]}, r"endpoint 'tcp/\[::1': expected tcp/HOST:PORT"),
