@@ -26,11 +26,16 @@ class _Yaml12Loader(yaml.SafeLoader):  # type: ignore[misc]  # PyYAML ships no s
     """PyYAML's safe loader with YAML 1.2's float forms: digits with an exponent and no dot."""
 
 
-_Yaml12Loader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
-    list("-+0123456789."),
-)
+_EXPONENT_FLOAT = re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$")
+_Yaml12Loader.add_implicit_resolver("tag:yaml.org,2002:float", _EXPONENT_FLOAT, list("-+0123456789."))
+
+
+def yaml12_number(value: Any) -> Any:
+    """``value``, or the float it stands for when it is text in YAML 1.2's exponent form: a ROS parameter given
+    on the command line (``_rate:=1e1``) reaches a node as the text ``"1e1"``, since rospy reads it as YAML 1.1."""
+    if isinstance(value, str) and _EXPONENT_FLOAT.match(value.strip()):
+        return float(value.replace("_", ""))
+    return value
 
 
 # A description written by hand or by a tool (world, map, obstacles, config, golden file) is kilobytes.

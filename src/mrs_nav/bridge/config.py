@@ -22,6 +22,7 @@ from typing import Any
 from mrs_nav.bridge.acl import access_control
 from mrs_nav.bridge.keys import KeyLayout, check_topic, check_type, robot_prefix
 from mrs_nav.errors import InvalidInputError
+from mrs_nav.textfiles import yaml12_number
 
 MODES = ("peer", "client", "router")
 DEFAULT_LISTEN = ("tcp/127.0.0.1:7447",)
@@ -41,9 +42,6 @@ DISCOVERY_PERIOD_S = (0.1, 60.0)
 PLUGIN_FORGETS_S = 3.0
 # retry_period is the longest wait between reconnections; Zenoh's first retry comes after 100 ms anyway.
 RETRY_PERIOD_S = (0.1, 3600.0)
-# Parameters that are numbers; a ROS parameter given on the command line (``_retry_period:=1e3``) arrives as
-# text when YAML 1.1 does not read it as a number.
-NUMBER_PARAMS = ("default_max_rate", "discovery_period", "retry_period")
 _ENDPOINT = re.compile(r"^(tcp|udp|tls|quic|ws|unixsock-stream)/([^?#\s]+)([?#]\S*)?$")
 _HOST_PORT = re.compile(r"^(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9]([A-Za-z0-9.-]*[A-Za-z0-9])?):([0-9]{1,5})$")
 
@@ -238,7 +236,7 @@ class BridgeConfig:
         for key in ("listen", "connect", "operators"):
             if key in params:
                 kwargs[key] = _text_list(params[key], key)
-        for key in NUMBER_PARAMS:
+        for key in ("default_max_rate", "discovery_period", "retry_period"):
             if key in params:
                 kwargs[key] = _number(params[key], key)
         if "acl" in params:
@@ -309,6 +307,7 @@ def _text_list(value: Any, what: str) -> tuple[str, ...]:
 
 
 def _number(value: Any, what: str) -> float:
+    value = yaml12_number(value)
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise InvalidInputError(f"{what}: expected a number, got {value!r}")
     return float(value)

@@ -34,7 +34,7 @@ import zenoh
 import zenoh.ext
 from roslib.message import get_message_class
 
-from mrs_nav.bridge.config import MAX_FILE_BYTES, NUMBER_PARAMS, BridgeConfig, InboundRule
+from mrs_nav.bridge.config import MAX_FILE_BYTES, BridgeConfig, InboundRule
 from mrs_nav.bridge.inbound import InboundValidator
 from mrs_nav.bridge.keys import (
     KeyLayout,
@@ -57,7 +57,6 @@ from mrs_nav.bridge.wire import (
     stamp_attachment,
 )
 from mrs_nav.errors import MrsNavError
-from mrs_nav.ros.params import private_param
 from mrs_nav.textfiles import load_yaml, read_text
 
 # Messages dropped by the inbound checks are logged at most once per this many seconds (with a count).
@@ -70,9 +69,6 @@ SUSPECT_TICKS = 3
 def load_config() -> BridgeConfig:
     """Private parameters, overridden by the YAML file named in ``~config_file`` when given."""
     params: dict[str, Any] = dict(rospy.get_param("~", {}))
-    for key in NUMBER_PARAMS:
-        if key in params:  # set, so the default 0.0 is never returned; the config checks the range
-            params[key] = private_param(key, 0.0)
     path = str(params.pop("config_file", "") or "")
     if path:
         where = f"~config_file {path}"

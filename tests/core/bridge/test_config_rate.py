@@ -70,6 +70,13 @@ def test_a_bridge_in_a_namespace_names_its_robots_topics_as_the_robot_does() -> 
     assert (plain.ros_topic("/odom"), plain.robot_topic("/tb3_0/odom")) == ("/odom", "/tb3_0/odom")
 
 
+def test_numbers_a_command_line_hands_over_as_text_are_read() -> None:
+    # rospy reads _max_rates:="{/scan: 1e1}" with YAML 1.1, which leaves 1e1 as text
+    config = BridgeConfig.from_mapping({"max_rates": {"/scan": "1e1"}, "discovery_period": "2.5e-1"})
+    assert config.max_rates == (("/scan", 10.0),)
+    assert config.discovery_period == 0.25
+
+
 @pytest.mark.parametrize(
     ("params", "match"),
     [
