@@ -1,5 +1,5 @@
-"""Reading the files users hand over by name: regular files only, bounded in size, text as UTF-8, YAML with
-YAML 1.2's numbers.
+"""The files users name: inputs read as regular files only, bounded in size, text as UTF-8, YAML with YAML 1.2's
+numbers; outputs checked writable before the work.
 
 A path to a device (``/dev/zero``), a FIFO or a huge file would otherwise be read without end or block in
 ``open``; each reader here refuses it with one line naming the file, before reading. PyYAML implements YAML 1.1,
@@ -11,23 +11,30 @@ Logs too large to hold are streamed instead: :func:`check_regular` before openin
 
 from __future__ import annotations
 
+import functools
 import re
 import stat
+import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 from typing import IO, Any
 
-import yaml
-
 from mrs_nav.errors import InvalidInputError, MrsNavError
 
-
-class _Yaml12Loader(yaml.SafeLoader):  # type: ignore[misc]  # PyYAML ships no stubs here
-    """PyYAML's safe loader with YAML 1.2's float forms: digits with an exponent and no dot."""
-
-
 _EXPONENT_FLOAT = re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$")
-_Yaml12Loader.add_implicit_resolver("tag:yaml.org,2002:float", _EXPONENT_FLOAT, list("-+0123456789."))
+
+
+@functools.cache
+def _yaml12_loader() -> Any:
+    """PyYAML's safe loader with YAML 1.2's float forms (digits with an exponent and no dot). Built on first use:
+    the remote monitor installs without PyYAML and reads no YAML."""
+    import yaml  # noqa: PLC0415
+
+    class Yaml12Loader(yaml.SafeLoader):  # type: ignore[misc]  # PyYAML ships no stubs here
+        pass
+
+    Yaml12Loader.add_implicit_resolver("tag:yaml.org,2002:float", _EXPONENT_FLOAT, list("-+0123456789."))
+    return Yaml12Loader
 
 
 def yaml12_number(value: Any) -> Any:
@@ -94,9 +101,34 @@ def read_text(path: Path, limit: int, what: str, error: type[MrsNavError] = Inva
 
 def load_yaml(text: str, where: str, error: type[MrsNavError] = InvalidInputError) -> Any:
     """``text`` parsed as YAML (safe types, YAML 1.2 floats); ``error`` names ``where`` on malformed input."""
+    import yaml  # noqa: PLC0415 - see _yaml12_loader
+
     try:
-        return yaml.load(text, Loader=_Yaml12Loader)  # a SafeLoader subclass: safe types only
+        return yaml.load(text, Loader=_yaml12_loader())  # a SafeLoader subclass: safe types only
     except yaml.YAMLError as err:
         raise error(f"{where}: malformed YAML: {' '.join(str(err).split())}") from None
     except RecursionError:
         raise error(f"{where}: malformed YAML: nested too deeply") from None
+
+
+def check_writable(path: Path, what: str, *, folder: bool = False) -> Path:
+    """``path`` when an output can be written there (a folder, created now, or a file in one); else an error.
+
+    Checked before the work so that an unwritable ``--out`` or ``--png`` fails at once, not after a long run.
+    A scratch file is really created (and removed): permission bits alone say nothing for root or odd file
+    systems such as /proc.
+    """
+    target = path if folder else path.parent
+    if not folder and path.is_dir():
+        raise InvalidInputError(f"{what}: {path} is a folder, expected a file name")
+    if not folder and (path.is_fifo() or path.is_socket()):  # writing would wait for a reader, maybe for ever
+        raise InvalidInputError(f"{what}: {path} is a FIFO or a socket, expected a file name")
+    try:
+        target.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=target):
+            pass
+    except (FileExistsError, NotADirectoryError):
+        raise InvalidInputError(f"{what}: cannot write into {target}: a file is in the way of that folder") from None
+    except OSError as err:
+        raise InvalidInputError(f"{what}: cannot write into {target}: {err.strerror}") from None
+    return path

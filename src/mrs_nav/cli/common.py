@@ -6,37 +6,10 @@ import argparse
 import json
 import math
 import sys
-import tempfile
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
-from mrs_nav.errors import InvalidInputError
-
 Handler = Callable[[argparse.Namespace], int]
-
-
-def check_writable(path: Path, what: str, *, folder: bool = False) -> Path:
-    """``path`` when an output can be written there (a folder, created now, or a file in one); else an error.
-
-    Checked before the work so that an unwritable ``--out`` or ``--png`` fails at once, not after a long run.
-    A scratch file is really created (and removed): permission bits alone say nothing for root or odd file
-    systems such as /proc.
-    """
-    target = path if folder else path.parent
-    if not folder and path.is_dir():
-        raise InvalidInputError(f"{what}: {path} is a folder, expected a file name")
-    if not folder and (path.is_fifo() or path.is_socket()):  # writing would wait for a reader, maybe for ever
-        raise InvalidInputError(f"{what}: {path} is a FIFO or a socket, expected a file name")
-    try:
-        target.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=target):
-            pass
-    except (FileExistsError, NotADirectoryError):
-        raise InvalidInputError(f"{what}: cannot write into {target}: a file is in the way of that folder") from None
-    except OSError as err:
-        raise InvalidInputError(f"{what}: cannot write into {target}: {err.strerror}") from None
-    return path
 
 
 def print_json(payload: dict[str, Any]) -> None:

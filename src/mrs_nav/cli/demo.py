@@ -10,7 +10,7 @@ from typing import Any
 from tqdm import tqdm
 
 from mrs_nav.bag.session import SessionBag
-from mrs_nav.cli.common import check_writable, print_json
+from mrs_nav.cli.common import print_json
 from mrs_nav.cli.plan import check_free
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
@@ -21,6 +21,7 @@ from mrs_nav.maps.world import load_world
 from mrs_nav.options import budget_option, parse_floats, seed_option
 from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.stack.demo import Demo, DemoConfig, save_figure
+from mrs_nav.textfiles import check_writable
 
 # Start pose and goals used when --start / --goals are not given, per shipped world.
 DEFAULTS = {

@@ -7,9 +7,9 @@ import importlib
 from pathlib import Path
 from typing import Any
 
-from mrs_nav.cli.common import check_writable
 from mrs_nav.limits import MAX_SEED
 from mrs_nav.options import seed_option
+from mrs_nav.textfiles import check_writable
 
 # Figure-set modules under mrs_nav.figures, each exposing make_figures(out_dir, seed) -> list[Path].
 FIGURE_SETS = ("mrs_nav.figures.potential_field", "mrs_nav.figures.rrt")

@@ -15,10 +15,11 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from mrs_nav.cli.common import check_writable, print_json
+from mrs_nav.cli.common import print_json
 from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.limits import MAX_BENCH_S
 from mrs_nav.options import number_option, parse_floats
+from mrs_nav.textfiles import check_writable
 
 _SECONDS = number_option(0.0, MAX_BENCH_S)
 _PERIOD = number_option(0.05, 3600.0)

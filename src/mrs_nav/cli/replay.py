@@ -12,7 +12,7 @@ from typing import Any
 
 from tqdm import tqdm
 
-from mrs_nav.cli.common import check_writable, fail, print_json
+from mrs_nav.cli.common import fail, print_json
 from mrs_nav.options import number_option, runs_option
 from mrs_nav.replay.batch import (
     aggregate,
@@ -25,6 +25,7 @@ from mrs_nav.replay.batch import (
 from mrs_nav.replay.golden import dump_json, make_golden
 from mrs_nav.replay.job_options import add_options, golden_job, job_from_args
 from mrs_nav.slam.relations import load_relations
+from mrs_nav.textfiles import check_writable
 
 
 def register(subparsers: Any) -> None:

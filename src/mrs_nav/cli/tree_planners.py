@@ -12,7 +12,6 @@ from pathlib import Path
 
 import numpy as np
 
-from mrs_nav.cli.common import check_writable
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.limits import MAX_BUDGET_S, MAX_ITERATIONS, MAX_SIZE_M
@@ -22,6 +21,7 @@ from mrs_nav.maps.rasterize import DEFAULT_RESOLUTION, rasterize_world
 from mrs_nav.maps.world import load_world
 from mrs_nav.options import budget_option, count_option, number_option
 from mrs_nav.planning import PlanResult
+from mrs_nav.textfiles import check_writable
 from mrs_nav.trees.rrt import RRTConfig, grow_rrt
 from mrs_nav.trees.rrt_star import RRTStarConfig, grow_rrt_star
 from mrs_nav.trees.tree import Search

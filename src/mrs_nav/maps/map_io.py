@@ -68,6 +68,18 @@ def _check_geometry(resolution: float, origin: Sequence[float], where: Path) -> 
         )
 
 
+def _yaml_string(text: str) -> str:
+    """``text`` as a YAML scalar: plain, as map_saver writes names, when YAML reads that back as the same text;
+    otherwise double-quoted (a JSON string is one), so that a name holding ': ', '#', a newline, or reading as a
+    number or a boolean (``1e5``, ``yes``) reads back too."""
+    try:
+        if load_yaml(f"image: {text}", "image") == {"image": text}:
+            return text
+    except InvalidInputError:
+        pass
+    return json.dumps(text)
+
+
 def _yaml_float(value: float) -> str:
     """``value`` as a YAML float for 1.1 readers too: ``repr`` writes ``1e-05``, which YAML 1.1 reads as text, so
     the mantissa gets a dot (``1.0e-05``)."""
@@ -206,8 +218,7 @@ def save_map(
     pixels[grid.values >= occupied_min] = _SAVE_OCCUPIED
     header = f"P5\n# CREATOR: mrs_nav {grid.resolution:g} m/pix\n{grid.width} {grid.height}\n255\n".encode()
     meta = (
-        # A JSON string is a YAML double-quoted scalar: a name holding ': ', '#' or a newline reads back as itself.
-        f"image: {json.dumps(image_path.name)}\n"
+        f"image: {_yaml_string(image_path.name)}\n"
         f"resolution: {_yaml_float(grid.resolution)}\n"
         f"origin: [{', '.join(_yaml_float(v) for v in grid.origin)}]\n"
         "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\nmode: trinary\n"

@@ -19,7 +19,6 @@ from nav_msgs.msg import MapMetaData
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.srv import GetMap, GetMapRequest, GetMapResponse
 
-from mrs_nav.cli.common import check_writable
 from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.maps.map_io import load_map, map_targets, save_map
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
@@ -27,6 +26,7 @@ from mrs_nav.options import Parser, integer_option
 from mrs_nav.ros.map_messages import occupancy_grid_msg
 from mrs_nav.ros.navigation_conversions import grid_from_msg
 from mrs_nav.ros.params import private_param
+from mrs_nav.textfiles import check_writable
 
 
 class MapServerNode:

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from mrs_nav.cli.common import check_writable
 from mrs_nav.errors import InvalidInputError
+from mrs_nav.textfiles import check_writable
 
 
 def test_a_fifo_as_an_output_file_is_refused(tmp_path: Path) -> None:
