@@ -168,3 +168,30 @@ def test_a_bad_odom_scale_is_one_error_line(args, match, tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1
     assert match in err[0]
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        # a device was read as one endless line until the process ran out of memory
+        (["carmen2bag", "/dev/zero", "x.bag"], "/dev/zero: cannot read CARMEN log: not a regular file"),
+        (["replay", "{bag}", "--slam", "--relations", "/dev/zero"], "cannot read relations file: not a regular file"),
+        # alphas of 1e308 overflowed the synthetic odometry to infinity, and the error named neither the option
+        # nor a line
+        (
+            ["carmen2bag", "{log}", "y.bag", "--odom", "synthetic", "--odom-noise", "1e308,0,0,0"],
+            "--odom-noise: odometry noise alphas must be in 0..10",
+        ),
+    ],
+)
+def test_unreadable_inputs_and_overflowing_noise_are_one_error_line(args, message, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    log = write_log(tmp_path / "a.log", log_lines(drive()[:20]))
+    bag = tmp_path / "a.bag"
+    assert main(["carmen2bag", str(log), str(bag)]) == 0
+    capsys.readouterr()
+    assert main([a.format(log=log, bag=bag) for a in args]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert err[0].startswith("ERROR: ")
+    assert message in err[0]
