@@ -37,7 +37,7 @@ from mrs_nav.limits import (
     check_grid_cells,
 )
 from mrs_nav.maps.occupancy_grid import FREE_MAX, OCCUPIED, OCCUPIED_MIN, UNKNOWN, OccupancyGrid
-from mrs_nav.textfiles import load_yaml, read_regular, read_text
+from mrs_nav.textfiles import check_writable, load_yaml, read_regular, read_text
 
 _SAVE_FREE, _SAVE_OCCUPIED, _SAVE_UNKNOWN = 254, 0, 205
 _MODES = ("trinary", "scale", "raw")
@@ -188,15 +188,19 @@ def load_map(path: str | Path) -> OccupancyGrid:
         raise MapFileError(f"{path}: {err}") from err
 
 
-def map_targets(path: Path) -> tuple[Path, Path]:
+def map_targets(path: Path, what: str = "") -> tuple[Path, Path]:
     """The ``.yaml`` at ``path`` and the ``.pgm`` beside it that :func:`save_map` writes; MapFileError when ``path``
-    does not end in ``.yaml`` or either target is something a file cannot replace (a folder)."""
+    does not end in ``.yaml`` or either target is something a file cannot replace (a folder). Given ``what`` (the
+    option naming ``path``), both are also checked writable now, before the work that makes the map."""
     if path.suffix != ".yaml":
         raise MapFileError(f"{path}: a map description must end in .yaml")
     image_path = path.with_suffix(".pgm")
     for target in (path, image_path):
         if target.exists() and not target.is_file():
             raise MapFileError(f"{target}: cannot write map: not a regular file")
+    if what:
+        for target in (path, image_path):
+            check_writable(target, what)
     return path, image_path
 
 

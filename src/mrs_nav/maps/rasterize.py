@@ -72,7 +72,7 @@ def rasterize_world(world: World, resolution: float = DEFAULT_RESOLUTION, margin
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m mrs_nav.maps.rasterize WORLD OUT.yaml [--resolution R] [--margin M]``: write map_server files."""
-    from mrs_nav.maps.map_io import save_map  # noqa: PLC0415 - only the command needs file output
+    from mrs_nav.maps.map_io import map_targets, save_map  # noqa: PLC0415 - only the command needs file output
 
     parser = Parser(prog="python -m mrs_nav.maps.rasterize", description=main.__doc__)
     parser.add_argument("world", type=Path)
@@ -83,6 +83,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--margin", type=length_option, default=0.0, help="free border around the obstacles, metres")
     try:
         args = parser.parse_args(argv)
+        map_targets(args.out, "OUT")  # writable before the rasterising, seconds on a large world
         save_map(rasterize_world(load_world(args.world), args.resolution, args.margin), args.out)
     except MrsNavError as err:
         print(f"ERROR: {err}", file=sys.stderr)

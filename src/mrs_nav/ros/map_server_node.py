@@ -26,7 +26,6 @@ from mrs_nav.options import Parser, integer_option
 from mrs_nav.ros.map_messages import occupancy_grid_msg
 from mrs_nav.ros.navigation_conversions import grid_from_msg
 from mrs_nav.ros.params import private_param
-from mrs_nav.textfiles import check_writable
 
 
 class MapServerNode:
@@ -82,8 +81,7 @@ class SaverOptions:
         options = cls(Path(args.name), args.occ, args.free)
         if not 0 <= options.free_max < options.occupied_min <= 100:
             raise InvalidInputError(f"need 0 <= --free ({args.free}) < --occ ({args.occ}) <= 100")
-        for target in map_targets(options.yaml_path):
-            check_writable(target, "-f")
+        map_targets(options.yaml_path, "-f")
         return options
 
 
