@@ -137,7 +137,7 @@ class ParticleFilter:
         xmin, ymin, xmax, ymax = self.grid.extent
         if not (xmin <= pose.x <= xmax and ymin <= pose.y <= ymax):
             raise InvalidInputError(
-                f"initial pose ({pose.x:.3g}, {pose.y:.3g}) m lies off the map "
+                f"initial pose {format_point(pose.x, pose.y)} m lies off the map "
                 f"(x {xmin:.3g}..{xmax:.3g}, y {ymin:.3g}..{ymax:.3g} m)"
             )
         sd_x, sd_y, sd_yaw = np.sqrt(np.diag(cov))

@@ -36,7 +36,7 @@ from sensor_msgs.msg import LaserScan
 from std_srvs.srv import Empty, EmptyRequest, EmptyResponse
 
 from mrs_nav.errors import InvalidInputError, MrsNavError
-from mrs_nav.geometry import FloatArray, Pose2D
+from mrs_nav.geometry import FloatArray, Pose2D, format_point
 from mrs_nav.localisation import BeamScan, LocalisationConfig, ParticleFilter, PoseEstimate
 from mrs_nav.ros.conversions import pose_from_msg, pose_msg
 from mrs_nav.ros.map_odom import MapOdomBroadcaster, check_timing, known_frames, lookup_pose
@@ -169,7 +169,7 @@ class LocalisationNode:
         except MrsNavError as err:
             rospy.logwarn_throttle(5.0, f"localisation: ignoring initial pose: {err}")
             return
-        rospy.loginfo(f"localisation: initial pose ({pose.x:.4g}, {pose.y:.4g}, {pose.yaw:.2f})")
+        rospy.loginfo(f"localisation: initial pose {format_point(pose.x, pose.y)}, yaw {pose.yaw:.2f}")
 
     def _on_global_localization(self, _request: EmptyRequest) -> EmptyResponse:
         with self._lock:
