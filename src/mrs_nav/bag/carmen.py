@@ -41,7 +41,10 @@ from mrs_nav.textfiles import bounded_lines, check_regular
 MAX_BEAMS = 10_000  # beams per scan; the densest 2-D lasers give a few thousand
 MAX_RANGE_M = 1_000.0  # m; no 2-D laser in these logs reaches a kilometre
 MAX_COORDINATE_M = 100_000.0  # m; a pose farther out than 100 km is not a building
-MAX_STAMP_S = 2.0**32  # s; ROS 1 time is an unsigned 32-bit second count
+# s; ROS 1 time is an unsigned 32-bit second count. Logs count from other origins too (the MIT Infinite Corridor
+# log starts at -0.04 s) and carry single glitched stamps (Freiburg 079, Seattle: one ODOM line at -0.96 or
+# -1.63 s among stamps of thousands): stamps are read within +-2^32 s and made ROS times by the conversion.
+MAX_STAMP_S = 2.0**32
 MAX_LINE_CHARS = 64 * MAX_BEAMS  # a line of the longest scan's numbers, remissions and all, written out in full
 ANCHOR_TOLERANCE = 1e-4  # m and rad: an ODOM line this close to a scan's pose re-anchors the stream
 
@@ -94,8 +97,8 @@ def _numbers(fields: list[str], where: str, what: str) -> list[float]:
 
 
 def _stamp(value: float, where: str) -> float:
-    if not (math.isfinite(value) and 0.0 <= value < MAX_STAMP_S):
-        raise InvalidInputError(f"{where}: timestamp {value} is not a time in 0..2^32 s")
+    if not (math.isfinite(value) and abs(value) < MAX_STAMP_S):
+        raise InvalidInputError(f"{where}: timestamp {value} is not a time within +-2^32 s")
     return value
 
 

@@ -18,7 +18,8 @@ from the logged poses' increments with the odometry motion model's noise (:mod:`
 Stamps: scans must be strictly increasing in time. A scan stamped at or before its predecessor (duplicate,
 constant or backwards stamps) is restamped: a run of such scans is spread evenly between the last good stamp and
 the next later one (at the end of the log, at the median of the log's increasing intervals, 1 s when there are
-none); the repairs are counted in a note. The scans' order in the file is kept.
+none); the repairs are counted in a note. The scans' order in the file is kept. ROS time is not negative: a log
+whose first scan is stamped before 0 is shifted to start there, with a note.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mrs_nav.bag.carmen import CarmenLog, CarmenScan, read_log
+from mrs_nav.bag.carmen import MAX_STAMP_S, CarmenLog, CarmenScan, read_log
 from mrs_nav.bag.io import BagWriter
 from mrs_nav.bag.messages import LASER_SCAN, ODOMETRY, laser_scan_message, odometry_message, tf_message
 from mrs_nav.errors import InvalidInputError
@@ -99,6 +100,13 @@ def carmen_to_bag(
     else:
         odom = noisy_odometry([s.pose for s in scans], noise, np.random.default_rng(seed))
         kind = "synthetic"
+    if stamps[0] < 0.0:
+        shift = -stamps[0]
+        if stamps[-1] + shift >= MAX_STAMP_S:
+            raise InvalidInputError(f"CARMEN log {log}: its scans span more than 2^32 s, beyond ROS time")
+        notes.append(f"{log}: the first scan is stamped {stamps[0]:.6g} s; every stamp shifted by +{shift:.6g} s")
+        stamps = [t + shift for t in stamps]
+        between = [[(t + shift, pose) for t, pose in path] for path in between]
     limit = max_range if max_range is not None else max(float(np.max(s.ranges)) for s in scans)
     if not limit > 0.0:
         raise InvalidInputError(f"CARMEN log {log}: every range is 0, so the laser's range limit is unknown")

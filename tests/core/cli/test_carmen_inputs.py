@@ -75,6 +75,29 @@ def test_broken_stamps_are_repaired_with_a_note(kind, tmp_path, capsys):
     assert summary["ate_rmse_m"] < 0.03
 
 
+def test_negative_stamps_are_shifted_and_a_glitched_odom_stamp_left_out(tmp_path, capsys):
+    # As in public logs: time counted from just before the first scan, and one ODOM line stamped far back.
+    poses = drive()
+    stamps = [-1.0 + 0.5 * i for i in range(len(poses))]
+    lines = log_lines(poses, seed=5, stamps=stamps)
+    glitch = [i for i, line in enumerate(lines) if line.startswith("ODOM") and not line.endswith(" 0 host 0")][30]
+    fields = lines[glitch].split()
+    fields[7] = fields[9] = "-14.4854"
+    lines[glitch] = " ".join(fields)
+    bag = tmp_path / "n.bag"
+    assert main(["carmen2bag", str(write_log(tmp_path / "n.log", lines)), str(bag)]) == 0
+    assert "every stamp shifted by +1 s" in capsys.readouterr().err
+    scan_stamps = [t for _, t, _ in read_messages(bag, ["/scan"])]  # ns
+    assert scan_stamps[0] == 0
+    assert all(b - a == 500_000_000 for a, b in itertools.pairwise(scan_stamps))
+    odom_stamps = [t for _, t, _ in read_messages(bag, ["/odom"])]
+    assert all(b > a for a, b in itertools.pairwise(odom_stamps))
+    assert len(odom_stamps) == 2 * len(poses) - 2  # the glitched line is not published; its pose still counts
+    code, summary, _ = replay(bag, tmp_path / "out", capsys)
+    assert code == 0
+    assert summary["ate_rmse_m"] < 0.03
+
+
 @pytest.mark.parametrize("odom_constant", [False, True])
 def test_replay_refuses_scans_that_cannot_be_paired(odom_constant, tmp_path, capsys):
     bag = tmp_path / "c.bag"
