@@ -42,6 +42,9 @@ from mrs_nav.slam.scan import LaserScanData
 
 TF = "tf2_msgs/msg/TFMessage"
 FALLBACK_INTERVAL_S = 1.0  # scan interval used to restamp a log that has no increasing stamps at all
+# Readings within 1 % of the log's largest are the laser's "no return" when the largest recurs (no_return_limit)
+NO_RETURN_BAND = 0.01
+NO_RETURN_REPEATS = 10
 ODOM_SCALE_RANGE = (0.5, 2.0)  # a wheel calibration off by more than a factor of 2 is a wrong number, not a fix
 
 
@@ -68,7 +71,8 @@ def carmen_to_bag(
 ) -> ConversionSummary:
     """Write the scans of ``log`` to ``bag`` (replacing it); odometry from the log unless ``noise`` is given.
 
-    ``max_range`` defaults to the log's largest reading (a SICK reports its limit for "no return").
+    ``max_range`` defaults to the laser's "no return" reading (:func:`no_return_limit`); readings at or past it
+    are no return.
     ``odom_scale`` multiplies the log's odometry increments (linear, angular); synthetic odometry is not scaled.
     """
     low, high = ODOM_SCALE_RANGE
@@ -107,11 +111,38 @@ def carmen_to_bag(
         notes.append(f"{log}: the first scan is stamped {stamps[0]:.6g} s; every stamp shifted by +{shift:.6g} s")
         stamps = [t + shift for t in stamps]
         between = [[(t + shift, pose) for t, pose in path] for path in between]
-    limit = max_range if max_range is not None else max(float(np.max(s.ranges)) for s in scans)
+    if max_range is None:
+        limit, band = no_return_limit(scans)
+        if band:
+            notes.append(
+                f"{log}: {band} readings of {limit:.6g}..{max(float(np.max(s.ranges)) for s in scans):.6g} m (within "
+                f"{NO_RETURN_BAND:.0%} of the largest) taken as 'no return': range_max {limit:.6g} m"
+            )
+    else:
+        limit = max_range
     if not limit > 0.0:
         raise InvalidInputError(f"CARMEN log {log}: every range is 0, so the laser's range limit is unknown")
     _write(bag, scans, stamps, (odom, between), limit=limit, progress=progress)
     return ConversionSummary(len(scans), stamps[-1] - stamps[0], kind, tuple(notes))
+
+
+def no_return_limit(scans: list[CarmenScan]) -> tuple[float, int]:
+    """The laser's "no return" reading: the lowest reading within :data:`NO_RETURN_BAND` of the log's largest,
+    and how many readings lie in that band below the largest; the largest alone where it occurs fewer than
+    :data:`NO_RETURN_REPEATS` times (a sentinel recurs, a far wall's exact reading rarely does).
+
+    Why a band: lasers report "no return" as their limit, but not always as one number (Seattle's SICK gives
+    81.87, 81.89 and 81.91 m, Acapulco's 51.14-51.16 m, Orebro's 32.759-32.767 m). Taking only the largest as
+    the limit made every other one a wall 80 m away: a ring of false hits that grew the map tenfold and pulled
+    the scan matcher.
+    """
+    largest = max(float(np.max(s.ranges)) for s in scans)
+    if sum(int(np.count_nonzero(s.ranges == largest)) for s in scans) < NO_RETURN_REPEATS:
+        return largest, 0  # no sentinel: a closed room's farthest wall
+    floor = largest * (1.0 - NO_RETURN_BAND)
+    banded = [s.ranges[s.ranges >= floor] for s in scans]
+    limit = min((float(r.min()) for r in banded if r.size), default=largest)
+    return limit, sum(int(np.count_nonzero(r < largest)) for r in banded)
 
 
 def log_odometry(

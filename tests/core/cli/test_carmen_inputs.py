@@ -98,6 +98,27 @@ def test_negative_stamps_are_shifted_and_a_glitched_odom_stamp_left_out(tmp_path
     assert summary["ate_rmse_m"] < 0.03
 
 
+def test_no_return_readings_spread_over_a_band_are_no_return(tmp_path, capsys):
+    # As Seattle's SICK: "no return" logged as 81.83, 81.87 or 81.91 m. None of them may become a wall.
+    poses = drive()
+    lines = log_lines(poses, seed=6)
+    flaser = [i for i, line in enumerate(lines) if line.startswith("FLASER")]
+    for i in flaser:  # the last three beams (left of the robot) see nothing
+        fields = lines[i].split()
+        fields[2 + 177 : 2 + 180] = ["81.83", "81.87", "81.91"]
+        lines[i] = " ".join(fields)
+    bag = tmp_path / "r.bag"
+    assert main(["carmen2bag", str(write_log(tmp_path / "r.log", lines)), str(bag)]) == 0
+    assert "taken as 'no return': range_max 81.83 m" in capsys.readouterr().err
+    scans = [m for _, _, m in read_messages(bag, ["/scan"])]
+    assert all(m.range_max == pytest.approx(81.83) for m in scans)
+    assert sum(r >= m.range_max for m in scans for r in m.ranges) == 3 * len(scans)
+    code, summary, _ = replay(bag, tmp_path / "out", capsys)
+    assert code == 0
+    assert summary["ate_rmse_m"] < 0.03
+    assert summary["free_endpoint_fraction"] < 0.01
+
+
 @pytest.mark.parametrize("odom_constant", [False, True])
 def test_replay_refuses_scans_that_cannot_be_paired(odom_constant, tmp_path, capsys):
     bag = tmp_path / "c.bag"
