@@ -12,7 +12,8 @@ between two scans in time order plus one at each scan's stamp; a scan with no od
 previous one (a gap) repeats the previous odometry pose, so the scan matcher has to find that motion alone.
 ``odom_scale`` (linear, angular) multiplies every increment: a correction of the wheels' calibration, or a
 known miscalibration to see how a SLAM result depends on the odometry.
-With ``noise`` given (``--odom synthetic``), or when the log has no ODOM lines at all, odometry is synthesised
+With ``noise`` given (``--odom synthetic``), or when the log has no ODOM lines at all or gaps at more than half
+its scans (:data:`MAX_GAP_FRACTION`), odometry is synthesised
 from the logged poses' increments with the odometry motion model's noise (:mod:`mrs_nav.motion_model`).
 
 Stamps: scans must be strictly increasing in time. A scan stamped at or before its predecessor (duplicate,
@@ -45,6 +46,9 @@ FALLBACK_INTERVAL_S = 1.0  # scan interval used to restamp a log that has no inc
 # Readings within 1 % of the log's largest are the laser's "no return" when the largest recurs (no_return_limit)
 NO_RETURN_BAND = 0.01
 NO_RETURN_REPEATS = 10
+# A log with odometry gaps at more than half its scans has no odometry to speak of (Orebro's ODOM lines all
+# re-anchor at a scan's pose): it is treated like a log without ODOM lines.
+MAX_GAP_FRACTION = 0.5
 ODOM_SCALE_RANGE = (0.5, 2.0)  # a wheel calibration off by more than a factor of 2 is a wrong number, not a fix
 
 
@@ -94,6 +98,12 @@ def carmen_to_bag(
         )
     if noise is None and content.odom_lines == 0:
         notes.append(f"{log}: no ODOM lines; odometry synthesised from the logged poses with the default noise")
+        noise = OdometryNoise.of(DEFAULT_ALPHAS)
+    elif noise is None and content.gaps > MAX_GAP_FRACTION * (len(scans) - 1):
+        notes.append(
+            f"{log}: {content.gaps} of {len(scans)} scans have no odometry since the previous scan (the ODOM lines "
+            "only repeat the scans' poses); odometry synthesised from the logged poses with the default noise"
+        )
         noise = OdometryNoise.of(DEFAULT_ALPHAS)
     between: list[list[tuple[float, Pose2D]]] = [[] for _ in scans]
     if noise is None:

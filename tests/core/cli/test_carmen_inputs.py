@@ -54,6 +54,19 @@ def test_a_turn_without_odometry_is_survived(tmp_path, capsys):
     assert summary["ate_rmse_m"] < 0.03
 
 
+def test_a_log_whose_odom_lines_only_repeat_the_scans_poses_gets_synthetic_odometry(tmp_path, capsys):
+    # As Orebro's corrected log: after each scan one ODOM line at that scan's pose, no wheel odometry between.
+    lines = [line for line in log_lines(drive(), seed=7) if not line.startswith("ODOM") or line.endswith(" 0 host 0")]
+    bag = tmp_path / "o.bag"
+    assert main(["carmen2bag", str(write_log(tmp_path / "o.log", lines)), str(bag), "--json"]) == 0
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["odometry"] == "synthetic"
+    assert "have no odometry since the previous scan (the ODOM lines only repeat" in captured.err
+    code, summary, _ = replay(bag, tmp_path / "out", capsys)
+    assert code == 0
+    assert summary["ate_rmse_m"] < 0.03
+
+
 @pytest.mark.parametrize("kind", ["constant", "two-valued", "backwards"])
 def test_broken_stamps_are_repaired_with_a_note(kind, tmp_path, capsys):
     poses = drive()
