@@ -24,7 +24,7 @@ import math
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.slam.config import MAX_MAP_CELLS, SlamConfig
 from mrs_nav.slam.grid import LogOddsGrid
-from mrs_nav.slam.matcher import ScanMatcher, window_field
+from mrs_nav.slam.matcher import ScanMatcher, match_in_grid
 from mrs_nav.slam.scan import BeamSplit
 
 SUBMAP_M = 10.0  # m of travel a full submap spans (the matched one spans between half of this and all of it)
@@ -67,8 +67,8 @@ class LocalTrack:
             pose = self.pose.compose(odom.relative_to(self._odom))
             if self._submaps and points.shape[0] >= 3:
                 prior = pose.compose(mount)
-                field = window_field(self._submaps[0].grid, points, prior, self.config.search_linear)
-                pose = self.matcher.match(field, points, prior, spread).pose.compose(mount.inverse())
+                match = match_in_grid(self.matcher, self._submaps[0].grid, points, prior, spread)
+                pose = match.pose.compose(mount.inverse())
         travelled = (
             self.travelled
             if self.pose is None

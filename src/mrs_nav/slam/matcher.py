@@ -38,6 +38,10 @@ PRIOR_WEIGHT = 0.05  # score units (mean likelihood, 0..1) per squared prior sta
 NORMAL_RADIUS = 2  # cells: the neighbourhood whose hits define a surface normal
 POINT_SIGMA_CELLS = 0.5  # assumed standard deviation of a point-to-hit residual, in cells
 FIELD_MAX_DISTANCE = 0.5  # m, truncation of the distance field
+# A match explaining fewer of the scan's points than this is lost, and searched for again widely (match_in_grid)
+LOST_BELOW = 0.3
+RECOVERY_SEARCH_M = 1.0  # m, half-width of that search's translation window; its headings: all round
+RECOVERED_INLIERS = 0.5  # share of points the wide search must explain to be taken
 INDEPENDENT_POINTS = 20.0  # neighbouring scan points are correlated; count at most this many as independent
 
 CellArray = npt.NDArray[np.int32]  # squared cell distances and grid indices of the distance field
@@ -161,6 +165,33 @@ def window_field(grid: LogOddsGrid, points: FloatArray, sensor_prior: Pose2D, se
     bounds = (float(wx.min()) - reach, float(wy.min()) - reach, float(wx.max()) + reach, float(wy.max()) + reach)
     pad = math.ceil(reach / grid.resolution) + 2
     return DistanceField(grid, bounds, FIELD_MAX_DISTANCE, pad)
+
+
+def match_in_grid(
+    matcher: ScanMatcher, grid: LogOddsGrid, points: FloatArray, prior: Pose2D, spread: tuple[float, float]
+) -> MatchResult:
+    """``matcher``'s match of the scan ``points`` (laser frame) in ``grid`` near the laser pose ``prior``; when
+    that match explains fewer than :data:`LOST_BELOW` of the points, the scan is searched for again over every
+    heading and :data:`RECOVERY_SEARCH_M` around ``prior``, without the odometry prior, and the result taken
+    where it explains at least :data:`RECOVERED_INLIERS` of them and twice as many as the first match.
+
+    Why: odometry can miss a whole turn (the Seattle log has a scan after an unrecorded 80 degree turn; wheels
+    slip, a robot is carried). Searched only near the odometry, such a scan fits nowhere (7 % of its points on
+    walls), is mapped at the wrong heading, and the rest of the map is built on it, consistent with itself and
+    wrong. Well matched scans explain 60-95 % of their points, so the wide search runs only where it can help.
+    """
+    match = matcher.match(window_field(grid, points, prior, matcher.search_linear), points, prior, spread)
+    if match.inlier_fraction >= LOST_BELOW or points.shape[0] < 3:
+        return match
+    wide = ScanMatcher(matcher.sigma, RECOVERY_SEARCH_M, math.pi)
+    # The window holds the scan turned any way round the prior: a disc of its reach plus the search.
+    reach = float(np.max(np.hypot(points[:, 0], points[:, 1]))) + RECOVERY_SEARCH_M + FIELD_MAX_DISTANCE
+    bounds = (prior.x - reach, prior.y - reach, prior.x + reach, prior.y + reach)
+    field = DistanceField(grid, bounds, FIELD_MAX_DISTANCE, math.ceil(FIELD_MAX_DISTANCE / grid.resolution) + 2)
+    found = wide.match(field, points, prior, (1e3, 1e3))
+    if found.inlier_fraction >= max(RECOVERED_INLIERS, 2.0 * match.inlier_fraction):
+        return found
+    return match
 
 
 class ScanMatcher:

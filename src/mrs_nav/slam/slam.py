@@ -46,7 +46,14 @@ from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.slam.config import MAX_COORDINATE_M, MAX_MAP_CELLS, SlamConfig
 from mrs_nav.slam.grid import LogOddsGrid
 from mrs_nav.slam.local_track import LocalTrack
-from mrs_nav.slam.matcher import DistanceField, MatchResult, ScanMatcher, thin_points, window_field
+from mrs_nav.slam.matcher import (
+    DistanceField,
+    MatchResult,
+    ScanMatcher,
+    match_in_grid,
+    thin_points,
+    window_field,
+)
 from mrs_nav.slam.posegraph import Edge, close_loop
 from mrs_nav.slam.scan import LaserScanData, StoredBeams, split_beams
 
@@ -219,8 +226,7 @@ class Slam:
         spread = self._spread(odom, self.last) if self.last is not None else (MIN_SPREAD_M, MIN_SPREAD_RAD)
         if self.last is not None and points.shape[0] >= MIN_POINTS:
             sensor_prior = predicted.compose(mount)
-            field = window_field(self.grid, thinned, sensor_prior, c.search_linear)
-            match = self.matcher.match(field, thinned, sensor_prior, spread)
+            match = match_in_grid(self.matcher, self.grid, thinned, sensor_prior, spread)
             pose = match.pose.compose(mount.inverse())
         else:
             pose = predicted

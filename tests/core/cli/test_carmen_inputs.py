@@ -88,6 +88,23 @@ def test_broken_stamps_are_repaired_with_a_note(kind, tmp_path, capsys):
     assert summary["ate_rmse_m"] < 0.03
 
 
+def test_a_quarter_turn_without_odometry_is_found_again(tmp_path, capsys):
+    # As in the Seattle log: the scans and the odometry of most of a turn are missing, so the next scan comes
+    # after a 1.5 rad turn that odometry never saw, far outside the matcher's usual +-0.5 rad.
+    poses = drive()
+    lines = log_lines(poses, seed=2)
+    flaser = [i for i, line in enumerate(lines) if line.startswith("FLASER")]
+    assert abs(poses[25].yaw - poses[20].yaw) == pytest.approx(1.5)
+    del lines[flaser[20] + 2 : flaser[25]]
+    bag = tmp_path / "turn.bag"
+    assert main(["carmen2bag", str(write_log(tmp_path / "turn.log", lines)), str(bag)]) == 0
+    capsys.readouterr()
+    code, summary, _ = replay(bag, tmp_path / "out", capsys)
+    assert code == 0
+    assert summary["ate_rmse_m"] < 0.03
+    assert summary["free_endpoint_fraction"] < 0.01
+
+
 def test_negative_stamps_are_shifted_and_a_glitched_odom_stamp_left_out(tmp_path, capsys):
     # As in public logs: time counted from just before the first scan, and one ODOM line stamped far back.
     poses = drive()
