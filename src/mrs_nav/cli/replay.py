@@ -24,6 +24,7 @@ from mrs_nav.replay.batch import (
 )
 from mrs_nav.replay.golden import dump_json, make_golden
 from mrs_nav.replay.job_options import add_options, golden_job, job_from_args
+from mrs_nav.slam.consistency import BROKEN_FRACTION
 from mrs_nav.slam.relations import load_relations
 from mrs_nav.textfiles import check_writable
 
@@ -124,6 +125,13 @@ def run(args: argparse.Namespace) -> int:
         record = make_golden(bag.name.removesuffix(".active"), _options(args), session.metrics)
         args.write_golden.write_text(dump_json(record), encoding="utf-8")
     summary = outcome.summary
+    if summary["map_broken"]:
+        print(
+            f"WARNING: bag {bag}: the SLAM map is likely broken (doubled or turned walls): "
+            f"{summary['free_endpoint_fraction']:.3f} of the scan end points lie on free cells of the final map, "
+            f"past the line of {BROKEN_FRACTION}; its figures describe a map that does not hold",
+            file=sys.stderr,
+        )
     if relations is not None:
         summary.update(session.slam.relation_errors(relations, args.relations_offset))
     summary["map_yaml"] = str(args.out / "slam_map.yaml")

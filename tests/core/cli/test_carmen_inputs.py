@@ -1,6 +1,7 @@
 """carmen2bag and replay on small CARMEN logs made at test time: real odometry, odometry gaps, broken stamps,
 bad lines, an existing bag."""
 
+import dataclasses
 import itertools
 import json
 import math
@@ -147,6 +148,24 @@ def test_no_return_readings_spread_over_a_band_are_no_return(tmp_path, capsys):
     assert code == 0
     assert summary["ate_rmse_m"] < 0.03
     assert summary["free_endpoint_fraction"] < 0.01
+
+
+def test_a_broken_map_is_said_to_be_broken(tmp_path, capsys):
+    # Scans whose beams are declared 20 % wider apart than they were cast: no pose makes two of them agree, as
+    # with a laser's geometry set wrong, so the walls of the map come out doubled.
+    bag = tmp_path / "wide.bag"
+    with BagWriter(bag) as writer:
+        for i, pose in enumerate(drive()):
+            t = 5.0 + 0.5 * i
+            scan = cast(pose)
+            scan = dataclasses.replace(scan, angle_increment=1.2 * scan.angle_increment)
+            writer.write("/scan", LASER_SCAN, round(t * 1e9), laser_scan_message(scan, t, "base_scan"))
+            writer.write("/odom", ODOMETRY, round(t * 1e9), odometry_message(pose, t, "odom", "base_footprint"))
+    code, summary, err = replay(bag, tmp_path / "out", capsys)
+    assert code == 0
+    assert summary["map_broken"] is True
+    assert summary["free_endpoint_fraction"] > 0.05
+    assert f"WARNING: bag {bag}: the SLAM map is likely broken" in err
 
 
 @pytest.mark.parametrize("odom_constant", [False, True])
