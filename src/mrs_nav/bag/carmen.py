@@ -12,7 +12,7 @@ beam count by ``carmen_laser_guess_angle_increment`` (1 degree for 180/181 beams
 compressed.
 
 Every line this module reads is checked against stated limits (:data:`MAX_BEAMS`, :data:`MAX_RANGE_M`,
-:data:`MAX_COORDINATE_M`, :data:`MAX_STAMP_S`); a bad one raises :class:`InvalidInputError` naming
+:data:`MAX_COORDINATE_M`, :data:`MAX_LOGGED_STAMP_S`); a bad one raises :class:`InvalidInputError` naming
 ``file:line`` and the field.
 
 Odometry (:func:`odometry_increments`): in a "corrected" log both FLASER pose triples are the corrected
@@ -41,10 +41,12 @@ from mrs_nav.textfiles import bounded_lines, check_regular
 MAX_BEAMS = 10_000  # beams per scan; the densest 2-D lasers give a few thousand
 MAX_RANGE_M = 1_000.0  # m; no 2-D laser in these logs reaches a kilometre
 MAX_COORDINATE_M = 100_000.0  # m; a pose farther out than 100 km is not a building
-# s; ROS 1 time is an unsigned 32-bit second count. Logs count from other origins too (the MIT Infinite Corridor
-# log starts at -0.04 s) and carry single glitched stamps (Freiburg 079, Seattle: one ODOM line at -0.96 or
-# -1.63 s among stamps of thousands): stamps are read within +-2^32 s and made ROS times by the conversion.
-MAX_STAMP_S = 2.0**32
+MAX_STAMP_S = 2.0**32  # s; ROS 1 time is an unsigned 32-bit second count
+# s; a logged stamp farther from 0 is not a time. Logs count from other origins (the MIT Infinite Corridor log
+# starts at -0.45 s, then prints 4.29497e+09: times wrapped at 2^32 and cut to six digits) and carry single
+# glitched stamps (Freiburg 079, Seattle: one ODOM line at -0.96 or -1.63 s among stamps of thousands); the
+# conversion makes ROS times of them (mrs_nav.bag.from_carmen).
+MAX_LOGGED_STAMP_S = 1e12
 MAX_LINE_CHARS = 64 * MAX_BEAMS  # a line of the longest scan's numbers, remissions and all, written out in full
 ANCHOR_TOLERANCE = 1e-4  # m and rad: an ODOM line this close to a scan's pose re-anchors the stream
 
@@ -97,8 +99,8 @@ def _numbers(fields: list[str], where: str, what: str) -> list[float]:
 
 
 def _stamp(value: float, where: str) -> float:
-    if not (math.isfinite(value) and abs(value) < MAX_STAMP_S):
-        raise InvalidInputError(f"{where}: timestamp {value} is not a time within +-2^32 s")
+    if not (math.isfinite(value) and abs(value) < MAX_LOGGED_STAMP_S):
+        raise InvalidInputError(f"{where}: timestamp {value} is not a time within +-1e12 s")
     return value
 
 

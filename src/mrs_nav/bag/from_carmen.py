@@ -19,7 +19,9 @@ from the logged poses' increments with the odometry motion model's noise (:mod:`
 Stamps: scans must be strictly increasing in time. A scan stamped at or before its predecessor (duplicate,
 constant or backwards stamps) is restamped: a run of such scans is spread evenly between the last good stamp and
 the next later one (at the end of the log, at the median of the log's increasing intervals, 1 s when there are
-none); the repairs are counted in a note. The scans' order in the file is kept. ROS time is not negative: a log
+none); the repairs are counted in a note. The scans' order in the file is kept. A log with more than half of
+its scans so stamped has no timing to repair: its scans are restamped 1 s apart and its odometry is written at
+the scans only. ROS time is not negative: a log
 whose first scan is stamped before 0 is shifted to start there, with a note.
 """
 
@@ -42,7 +44,11 @@ from mrs_nav.motion_model import DEFAULT_ALPHAS, OdometryNoise, noisy_odometry
 from mrs_nav.slam.scan import LaserScanData
 
 TF = "tf2_msgs/msg/TFMessage"
-FALLBACK_INTERVAL_S = 1.0  # scan interval used to restamp a log that has no increasing stamps at all
+FALLBACK_INTERVAL_S = 1.0  # scan interval used to restamp a log whose stamps carry no timing
+# A log with more than half of its scans stamped at or before their predecessor has no timing to repair
+# (constant, two-valued or wrapped stamps: CSAIL's two values 10,000 s apart, Belgioioso's and Freiburg campus's
+# one value): every scan is restamped FALLBACK_INTERVAL_S apart.
+MAX_RESTAMPED_FRACTION = 0.5
 # Readings within 1 % of the log's largest are the laser's "no return" when the largest recurs (no_return_limit)
 NO_RETURN_BAND = 0.01
 NO_RETURN_REPEATS = 10
@@ -89,8 +95,17 @@ def carmen_to_bag(
     if not scans:
         raise InvalidInputError(f"CARMEN log {log} has no FLASER lines")
     notes: list[str] = []
-    stamps, restamped, interval = repaired_stamps([s.timestamp for s in scans])
-    if restamped:
+    logged = [s.timestamp for s in scans]
+    stamps, restamped, interval = repaired_stamps(logged)
+    timed = restamped <= MAX_RESTAMPED_FRACTION * len(scans)
+    if not timed:
+        stamps = [i * FALLBACK_INTERVAL_S for i in range(len(scans))]
+        notes.append(
+            f"{log}: {restamped} of {len(scans)} scans were stamped at or before the previous scan, so the log's "
+            f"stamps carry no timing: every scan restamped {FALLBACK_INTERVAL_S:g} s after the previous one, "
+            "odometry written at the scans only"
+        )
+    elif restamped:
         notes.append(
             f"{log}: {restamped} of {len(scans)} scans were stamped at or before the previous scan; restamped "
             f"evenly between their good neighbours (at the end of the log: {interval:.3f} s apart, the median "
@@ -108,16 +123,20 @@ def carmen_to_bag(
     between: list[list[tuple[float, Pose2D]]] = [[] for _ in scans]
     if noise is None:
         odom, between = log_odometry(content, stamps, odom_scale)
+        if not timed:  # the ODOM lines' own stamps cannot be placed among the new ones
+            between = [[] for _ in scans]
         kind = "log"
         if content.gaps:
             notes.append(f"{log}: {content.gaps} scans have no odometry since the previous scan; odometry held there")
     else:
         odom = noisy_odometry([s.pose for s in scans], noise, np.random.default_rng(seed))
         kind = "synthetic"
+    if stamps[-1] - stamps[0] >= MAX_STAMP_S:
+        raise InvalidInputError(f"CARMEN log {log}: its scans span more than 2^32 s, beyond ROS time")
+    if stamps[-1] >= MAX_STAMP_S:
+        raise InvalidInputError(f"CARMEN log {log}: its last scan is stamped past 2^32 s, beyond ROS time")
     if stamps[0] < 0.0:
         shift = -stamps[0]
-        if stamps[-1] + shift >= MAX_STAMP_S:
-            raise InvalidInputError(f"CARMEN log {log}: its scans span more than 2^32 s, beyond ROS time")
         notes.append(f"{log}: the first scan is stamped {stamps[0]:.6g} s; every stamp shifted by +{shift:.6g} s")
         stamps = [t + shift for t in stamps]
         between = [[(t + shift, pose) for t, pose in path] for path in between]

@@ -41,7 +41,7 @@ def test_carmen_beam_angles(beams, degrees):
         (LINE.replace("2.0", "-2.0", 1), "range 1 is -2.0"),
         (LINE.replace("2.0", "1e9", 1), "range 1 is 1000000000.0"),
         (LINE.replace(" 12.5 pippo", " nan pippo"), "timestamp nan"),
-        (LINE.replace(" 12.5 pippo", " -5e9 pippo"), "timestamp -5000000000.0"),
+        (LINE.replace(" 12.5 pippo", " -5e12 pippo"), "timestamp -5000000000000.0"),
         (LINE.replace(" 12.5 pippo", " 1e300 pippo"), r"timestamp 1e\+300"),
         (LINE.replace("0.5 -0.25", "1e300 -0.25"), "FLASER pose"),
         (LINE.replace("0.5 -0.25", "inf -0.25"), "FLASER pose"),

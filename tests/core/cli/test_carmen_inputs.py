@@ -68,7 +68,7 @@ def test_a_log_whose_odom_lines_only_repeat_the_scans_poses_gets_synthetic_odome
     assert summary["ate_rmse_m"] < 0.03
 
 
-@pytest.mark.parametrize("kind", ["constant", "two-valued", "backwards"])
+@pytest.mark.parametrize("kind", ["constant", "two-valued", "backwards", "wrapped"])
 def test_broken_stamps_are_repaired_with_a_note(kind, tmp_path, capsys):
     poses = drive()
     n = len(poses)
@@ -76,6 +76,8 @@ def test_broken_stamps_are_repaired_with_a_note(kind, tmp_path, capsys):
         "constant": [100.0] * n,
         "two-valued": [100.0] * (n // 2) + [200.0] * (n - n // 2),
         "backwards": [10.0 + 0.5 * i - (0.8 if i == 30 else 0.0) for i in range(n)],
+        # As the MIT Infinite Corridor log: -0.45 s, then times wrapped at 2^32 s printed to six digits.
+        "wrapped": [-0.446] + [4294970000.0] * (n - 1),
     }[kind]
     bag = tmp_path / "b.bag"
     assert main(["carmen2bag", str(write_log(tmp_path / "b.log", log_lines(poses, stamps=stamps))), str(bag)]) == 0
