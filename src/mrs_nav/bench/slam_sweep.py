@@ -116,7 +116,7 @@ def run(args: argparse.Namespace) -> str:
             for i, combo in enumerate(combos)
         ]
         start = time.perf_counter()
-        outcomes = {o.out_dir: o for o in run_jobs(jobs, args.workers, args.cluster)}
+        outcomes = {o.out_dir: o for o in run_jobs(jobs, args.workers, args.cluster, fresh=True)}
         wall = time.perf_counter() - start
         rows = [_row(job, outcomes[job.out_dir], len(params)) for job in jobs]
     how = f"the Dask scheduler at {args.cluster}" if args.cluster else f"{args.workers} local worker process(es)"
@@ -130,11 +130,13 @@ def run(args: argparse.Namespace) -> str:
         "map",
         "CPU ms/scan median",
         "x real time (CPU)",
+        "peak RSS [MB]",
     ]
     return (
         f"### {len(jobs)} SLAM runs: {len(logs)} log(s) x {len(combos)} parameter combination(s)\n\n"
         f"Every run with {' '.join(params) or 'the shipped defaults'}; {len(jobs)} jobs on {how}, "
-        f"{wall:.1f} s wall in all. ATE compares with the log's corrected poses (another SLAM's output); "
+        f"{wall:.1f} s wall in all, each job in a process of its own (peak RSS: that process's; on a Dask "
+        "cluster, the worker's). ATE compares with the log's corrected poses (another SLAM's output); "
         f"'broken' = more than {BROKEN_FRACTION} of the scan end points on free cells away from walls.\n\n"
         + markdown_table(header, rows)
         + "\n"
@@ -144,7 +146,7 @@ def run(args: argparse.Namespace) -> str:
 def _row(job: BagJob, outcome: BagOutcome, fixed: int) -> list[object]:
     swept = " ".join(job.params[fixed:])
     if outcome.error is not None:
-        return [job.name, swept, "-", "-", "-", "-", f"error: {outcome.error}", "-", "-"]
+        return [job.name, swept, "-", "-", "-", "-", f"error: {outcome.error}", "-", "-", "-"]
     summary = outcome.summary
     free = summary["free_endpoint_fraction"]
     return [
@@ -157,4 +159,5 @@ def _row(job: BagJob, outcome: BagOutcome, fixed: int) -> list[object]:
         "broken" if free > BROKEN_FRACTION else "ok",
         summary["ms_per_scan_median"],
         summary["realtime_factor"],
+        outcome.peak_rss_mb if outcome.peak_rss_mb is not None else "-",
     ]

@@ -14,7 +14,9 @@ bar's monitor) starts them through ``forkserver`` instead, since ``fork`` would 
 
 from __future__ import annotations
 
+import dataclasses
 import multiprocessing
+import resource
 import tempfile
 import threading
 from collections.abc import Callable, Iterable, Sequence
@@ -65,6 +67,8 @@ class BagOutcome:
     error: str | None = None
     summary: dict[str, Any] = field(default_factory=dict)
     notes: tuple[str, ...] = ()
+    # Peak resident memory (MB) of the process that ran the job: the job's own with run_jobs(fresh=True)
+    peak_rss_mb: float | None = None
 
     @property
     def verdict(self) -> str:
@@ -153,9 +157,10 @@ def _skipped(session: SessionReplay) -> list[str]:
 def run_job(job: BagJob) -> BagOutcome:
     """:func:`replay_bag` for a worker: a domain error becomes the outcome's ``error`` instead of an exception."""
     try:
-        return replay_bag(job)[0]
+        outcome = replay_bag(job)[0]
     except MrsNavError as err:
-        return BagOutcome(name=job.name, out_dir=job.out_dir, has_golden=job.golden is not None, error=str(err))
+        outcome = BagOutcome(name=job.name, out_dir=job.out_dir, has_golden=job.golden is not None, error=str(err))
+    return dataclasses.replace(outcome, peak_rss_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0)
 
 
 def run_jobs(
@@ -163,10 +168,13 @@ def run_jobs(
     workers: int = 1,
     cluster: str | None = None,
     done: Callable[[BagOutcome], None] | None = None,
+    *,
+    fresh: bool = False,
 ) -> list[BagOutcome]:
     """Run every job (``workers`` local processes, or the Dask scheduler at ``cluster``); sorted by bag name.
 
-    ``done`` is called in this process as each job finishes (a progress bar).
+    ``done`` is called in this process as each job finishes (a progress bar). ``fresh``: every local job in a
+    process of its own, started anew, so that its ``peak_rss_mb`` is the job's alone (about a second more a job).
     """
     if workers < 1:
         raise InvalidInputError(f"--workers must be >= 1, got {workers}")
@@ -179,12 +187,16 @@ def run_jobs(
 
     if cluster is not None:
         _run_on_dask(jobs, cluster, finished)
-    elif workers == 1 or len(jobs) == 1:
+    elif not fresh and (workers == 1 or len(jobs) == 1):
         for job in jobs:
             finished(run_job(job))
     else:
-        context = multiprocessing.get_context("fork" if threading.active_count() == 1 else "forkserver")
-        with local.ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=context) as pool:
+        method = "spawn" if fresh else "fork" if threading.active_count() == 1 else "forkserver"
+        with local.ProcessPoolExecutor(
+            max_workers=min(workers, len(jobs)),
+            mp_context=multiprocessing.get_context(method),
+            max_tasks_per_child=1 if fresh else None,
+        ) as pool:
             for future in local.as_completed([pool.submit(run_job, job) for job in longest_first(jobs)]):
                 finished(future.result())
     return sorted(outcomes, key=lambda o: o.name)

@@ -300,4 +300,5 @@ def _shades(occ: npt.NDArray[np.int8]) -> npt.NDArray[np.uint8]:
         return shades
     height, width = -(-occ.shape[0] // block) * block, -(-occ.shape[1] // block) * block
     padded = np.pad(shades, ((0, height - occ.shape[0]), (0, width - occ.shape[1])), constant_values=204)
-    return padded.reshape(height // block, block, width // block, block).min(axis=(1, 3))
+    reduced: npt.NDArray[np.uint8] = padded.reshape(height // block, block, width // block, block).min(axis=(1, 3))
+    return reduced

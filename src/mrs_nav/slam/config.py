@@ -2,8 +2,8 @@
 
 Units: metres, radians, seconds. One set of defaults: ``config/slam.yaml``, which the SLAM node loads as its
 private parameters and :class:`SlamConfig` reads for its field defaults, so the node, ``mrs-nav replay`` and
-the benchmarks start from the same values. Range-dependent choices follow the scan: ``maxUrange`` 0 means the
-scan's own ``range_max``.
+the benchmarks start from the same values. Range-dependent choices follow the scan: the usable range is the
+scan's own ``range_max``, capped by ``maxUrange`` (0: no cap).
 
 Every value is checked against the stated range in :data:`LIMITS` (a value outside raises
 :class:`InvalidInputError` naming it), and the initial map extent against :data:`MAX_MAP_CELLS`, before
@@ -81,9 +81,10 @@ class SlamConfig:
 
     Attributes (gmapping's names):
         delta: map resolution, metres per cell.
-        maxUrange: usable laser range, metres; ``0`` means the scan's ``range_max`` (so one default serves a
-            3.5 m LDS and an 80 m SICK). Longer readings only clear free space up to this distance; their end
-            points are not marked occupied.
+        maxUrange: usable laser range, metres, at most the scan's ``range_max``; ``0`` means that
+            ``range_max`` (the default 30 m serves a 3.5 m LDS at its range_max and caps an 80 m SICK).
+            Longer readings only clear free space up to this distance; their end points are not marked
+            occupied.
         maxRange: readings at or beyond this (or the scan's own ``range_max``) are "no return" and ignored,
             as in gmapping. ``0`` means use the scan's ``range_max``.
         linearUpdate, angularUpdate: process a scan once the robot has travelled this far (m) or turned this
@@ -151,8 +152,8 @@ class SlamConfig:
             )
 
     def usable_range(self, range_max: float) -> float:
-        """maxUrange for a scan whose ``range_max`` is given (``maxUrange`` 0: that ``range_max``)."""
-        return range_max if self.maxUrange <= 0.0 else self.maxUrange
+        """maxUrange for a scan whose ``range_max`` is given: at most that ``range_max`` (``maxUrange`` 0: it)."""
+        return range_max if self.maxUrange <= 0.0 else min(self.maxUrange, range_max)
 
     @classmethod
     def from_assignments(cls, items: list[builtins.str]) -> SlamConfig:

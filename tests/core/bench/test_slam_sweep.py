@@ -16,9 +16,9 @@ from tests.core.bag.carmen_fixture import drive, log_lines, write_log
 FIGURES = slice(0, 7)
 
 
-def _rows(section: str) -> list[list[str]]:
+def _rows(section: str, columns: slice = FIGURES) -> list[list[str]]:
     lines = [line for line in section.splitlines() if line.startswith("| ") and not line.startswith("| log")]
-    return [[cell.strip() for cell in line.strip("|").split("|")][FIGURES] for line in lines]
+    return [[cell.strip() for cell in line.strip("|").split("|")][columns] for line in lines]
 
 
 def _sweep(tmp_path: Path, capsys: pytest.CaptureFixture[str], workers: int) -> str:
@@ -32,8 +32,13 @@ def _sweep(tmp_path: Path, capsys: pytest.CaptureFixture[str], workers: int) -> 
 def test_two_logs_by_two_values_in_parallel_equal_the_serial_sweep(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    serial = _rows(_sweep(tmp_path / "serial", capsys, 1))
+    serial_section = _sweep(tmp_path / "serial", capsys, 1)
+    serial = _rows(serial_section)
     parallel = _rows(_sweep(tmp_path / "parallel", capsys, 2))
+    # Each job ran in a process of its own: its peak memory is a process's (over 50 MB), not the pytest one's.
+    peaks = [float(row[0]) for row in _rows(serial_section, slice(9, 10))]
+    assert len(peaks) == 4
+    assert all(50.0 < peak < 2000.0 for peak in peaks)
     assert [row[:2] for row in serial] == [
         ["room1", "delta=0.05"],
         ["room1", "delta=0.1"],

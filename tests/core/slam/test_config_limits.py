@@ -40,10 +40,10 @@ def test_node_and_replay_read_the_same_defaults():
 
 def test_usable_range_follows_the_scan():
     config = SlamConfig()
-    assert config.maxUrange == 0.0
+    assert config.maxUrange == 30.0
     assert config.usable_range(3.5) == 3.5
-    assert config.usable_range(81.83) == 81.83
-    assert SlamConfig(maxUrange=30.0).usable_range(81.83) == 30.0
+    assert config.usable_range(81.83) == 30.0
+    assert SlamConfig(maxUrange=0.0).usable_range(81.83) == 81.83
 
 
 @pytest.mark.parametrize(
