@@ -146,6 +146,11 @@ def _skipped(session: SessionReplay) -> list[str]:
             f"skipped {result.scans_out_of_order} scans stamped at or before the previous scan and "
             f"{result.scans_rejected} scans without odometry or with bad values, of {result.scans_read}{first}"
         )
+    if result.slam.clipped_in_rebuild:
+        notes.append(
+            f"{result.slam.clipped_in_rebuild} scans reached past the map's cell limit when the map was rebuilt "
+            "after loop closures and were mapped clipped to it"
+        )
     if result.odom_rejected:
         notes.append(
             f"skipped {result.odom_rejected} of {result.odom_read} odometry messages farther than "

@@ -55,7 +55,7 @@ from mrs_nav.slam.matcher import (
     window_field,
 )
 from mrs_nav.slam.posegraph import Edge, close_loop
-from mrs_nav.slam.scan import LaserScanData, StoredBeams, split_beams
+from mrs_nav.slam.scan import BeamSplit, LaserScanData, StoredBeams, split_beams
 
 MIN_POINTS = 10  # fewer end points than this: trust odometry, the match would be noise
 MIN_SPREAD_M = 0.01  # m, floor of the odometry prediction's position spread
@@ -152,6 +152,7 @@ class Slam:
         self.loops_rejected = 0
         # Closures that moved the graph: the others already agreed with it (the drift went in some other way)
         self.loops_solved = 0
+        self.clipped_in_rebuild = 0  # scans mapped clipped at the cell limit by rebuilds (rebuild_map)
         self._last_loop_attempt = 0.0
         self._mapped: list[Pose2D] = []  # the pose each node was mapped at
         # per node: scans in its place (SCANS_KEPT_PER_NODE), as (laser pose in the node's frame, beams)
@@ -396,14 +397,30 @@ class Slam:
         return self.loop_matcher.match(field, points, prior, (1e3, 1e3)), field
 
     def rebuild_map(self) -> None:
-        """Map every node's scan, and the scans kept with it, again at its (corrected) pose."""
+        """Map every node's scan, and the scans kept with it, again at its (corrected) pose.
+
+        A scan that its corrected pose would take past the map's cell limit is mapped clipped to the map as it
+        is (counted in ``clipped_in_rebuild``): the map is cleared first, and a rebuild that stopped there would
+        leave it half drawn (the MIT Infinite Corridor log ended so, and its whole replay was lost).
+        """
         self.grid.clear()
         for record, kept in zip(self.nodes, self._kept, strict=True):
             if record.beams is not None:
-                self.grid.integrate(record.pose.compose(record.laser_pose), record.beams.split())
+                self._remap(record.pose.compose(record.laser_pose), record.beams.split())
             for laser, beams in kept:
-                self.grid.integrate(record.pose.compose(laser), beams.split())
+                self._remap(record.pose.compose(laser), beams.split())
         self._mapped = [r.pose for r in self.nodes]
+
+    def _remap(self, sensor: Pose2D, beams: BeamSplit) -> None:
+        try:
+            self.grid.integrate(sensor, beams)
+        except InvalidInputError:  # past the cell limit: nothing was changed; map what fits
+            grows, self.grid.grows = self.grid.grows, False
+            try:
+                self.grid.integrate(sensor, beams)
+            finally:
+                self.grid.grows = grows
+            self.clipped_in_rebuild += 1
 
     def _spread(self, odom: Pose2D, last: ProcessedScan) -> tuple[float, float]:
         """Standard deviations (m, rad) of the odometry prediction since the ``last`` processed scan."""

@@ -1,3 +1,4 @@
+import dataclasses
 import math
 from dataclasses import astuple
 
@@ -152,3 +153,18 @@ def test_the_map_rebuilt_from_the_kept_beams_is_the_map_built_online():
     scan_bytes = 360 * 8 * 2  # a 360-beam scan's angles and ranges in float64
     kept = max(r.beams.nbytes for r in slam.processed if r.beams is not None)
     assert kept <= scan_bytes / 2
+
+
+def test_a_rebuild_past_the_cell_limit_maps_what_fits_instead_of_failing():
+    slam = Slam(SlamConfig(linearUpdate=0.0, angularUpdate=0.0))
+    for i, pose in enumerate(drive(10)):
+        slam.add_scan(pose, cast(pose), float(i))
+    occupied = int(np.count_nonzero(slam.grid.logodds > 0.0))
+    # The map may not grow any more, and a correction moves the first node 30 m away, far off the map.
+    slam.grid.max_cells = slam.grid.width * slam.grid.height
+    first = slam.nodes[0]
+    slam.nodes[0] = dataclasses.replace(first, pose=first.pose.compose(Pose2D(30.0, 0.0, 0.0)))
+    slam.rebuild_map()
+    assert slam.clipped_in_rebuild == 1
+    # Every other scan is mapped again where it was: the map is not left cleared half-way.
+    assert int(np.count_nonzero(slam.grid.logodds > 0.0)) >= 0.8 * occupied
