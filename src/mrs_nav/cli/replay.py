@@ -128,8 +128,9 @@ def run(args: argparse.Namespace) -> int:
     if summary["map_broken"]:
         print(
             f"WARNING: bag {bag}: the SLAM map is likely broken (doubled or turned walls): "
-            f"{summary['free_endpoint_fraction']:.3f} of the scan end points lie on free cells of the final map, "
-            f"past the line of {BROKEN_FRACTION}; its figures describe a map that does not hold",
+            f"{summary['doubled_wall_fraction']:.4f} of the scan end points draw walls of a metre or more where the "
+            f"final map has free space, past the line of {BROKEN_FRACTION}; its figures describe a map that does "
+            "not hold",
             file=sys.stderr,
         )
     if relations is not None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -42,3 +43,11 @@ def cast(pose: Pose2D, beams: int = 360, max_range: float = 3.5, walls: np.ndarr
     ranges = t.min(axis=1)
     ranges[ranges >= max_range] = np.inf
     return LaserScanData(float(angles[0]), 2.0 * math.pi / beams, 0.12, max_range, ranges)
+
+
+def person(centre: np.ndarray, radius: float = 0.25) -> np.ndarray:
+    """Walls (segments) of a person as a laser sees one at ``centre``: a circle ``2 * radius`` m across, as an
+    octagon."""
+    angles = np.arange(9) * math.pi / 4
+    corners = np.stack([centre[0] + radius * np.cos(angles), centre[1] + radius * np.sin(angles)], axis=1)
+    return np.array([[*a, *b] for a, b in itertools.pairwise(corners)])

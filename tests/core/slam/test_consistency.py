@@ -1,6 +1,8 @@
-"""The revisit spread: end points of scans taken far apart in time, placed by a trajectory, and how far apart
-the same wall lands."""
+"""The map-consistency figures: end points on doubled walls (a person walking beside the robot is none, a map of
+scans that cannot agree has them), and the revisit spread: end points of scans taken far apart in time, placed by
+a trajectory, and how far apart the same wall lands."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -8,7 +10,18 @@ import pytest
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
-from mrs_nav.slam.consistency import REVISIT_GAP, revisit_spread, revisit_spread_by_distance
+from mrs_nav.slam import Slam, SlamConfig
+from mrs_nav.slam.consistency import (
+    BROKEN_FRACTION,
+    REVISIT_GAP,
+    doubled_wall_fraction,
+    free_endpoint_fraction,
+    revisit_spread,
+    revisit_spread_by_distance,
+)
+from mrs_nav.slam.scan import LaserScanData
+from tests.core.bag.carmen_fixture import drive
+from tests.core.slam.synthetic import ROOM, cast, person
 
 # A wall at x = 2 m in the world, sampled at the centres of 5 cm cells (thinning keeps them as they are).
 WALL = np.stack([np.full(40, 2.025), -0.975 + 0.05 * np.arange(40)], axis=1)
@@ -63,3 +76,33 @@ def test_a_stretched_building_shows_between_scans_taken_far_apart_only():
     assert 0.045 - 1e-9 <= far <= 0.05 + 1e-9
     with pytest.raises(InvalidInputError, match="2 positions for"):
         revisit_spread_by_distance(placed(1.0), scans, positions[:2], bands)
+
+
+def _mapped(scans: list[LaserScanData]) -> Slam:
+    """SLAM over ``scans`` taken along :func:`drive` (exact odometry), every scan processed."""
+    slam = Slam(SlamConfig(linearUpdate=0.0, angularUpdate=0.0))
+    for i, (pose, scan) in enumerate(zip(drive(), scans, strict=True)):
+        slam.add_scan(pose, scan, float(i))
+    slam.finish()
+    return slam
+
+
+def test_people_walking_with_the_robot_are_no_broken_map():
+    # Two people walk round the room with the robot, one ahead and to its left, one behind and to its right:
+    # everywhere they pass, the robot sees free floor before and after, so their end points land on free cells
+    # of the final map.
+    scans = []
+    for pose in drive():
+        people = [person(xy) for xy in pose.apply(np.array([[1.0, 0.7], [-0.8, -0.9]]))]
+        scans.append(cast(pose, walls=np.vstack([ROOM, *people])))
+    slam = _mapped(scans)
+    assert free_endpoint_fraction(slam) > 0.1  # as many as a doubled map's: the raw figure cannot tell them apart
+    assert doubled_wall_fraction(slam) < BROKEN_FRACTION / 10
+
+
+def test_doubled_walls_are_a_broken_map_and_an_empty_room_is_not():
+    # Scans whose beams are declared 20 % wider apart than they were cast: no pose makes two of them agree (a
+    # laser's geometry set wrong), so the walls come out doubled.
+    wide = [dataclasses.replace(s, angle_increment=1.2 * s.angle_increment) for s in map(cast, drive())]
+    assert doubled_wall_fraction(_mapped(wide)) > 2 * BROKEN_FRACTION
+    assert doubled_wall_fraction(_mapped([cast(pose) for pose in drive()])) == 0.0
