@@ -7,10 +7,14 @@ point is never cleared by the same scan, so the update does not depend on the an
 
 Like gmapping's point accumulator, each cell also keeps the mean of the end points that fell in it, so the scan
 matcher can align to where obstacles were seen rather than to cell centres (sub-cell accuracy). The sums are of
-offsets from the cell's corner, so float32 keeps them exact to micrometres: 16 bytes a cell in all.
+offsets from the cell's corner, so float32 keeps them exact to micrometres: 16 bytes a cell in all, in four
+arrays of 4 bytes a cell.
 
 The grid covers the bounding box of what scans have reached (plus a growth margin), never more than
-``max_cells`` cells: growth past that raises :class:`InvalidInputError` before anything is allocated.
+``max_cells`` cells: growth past that raises :class:`InvalidInputError` before anything is allocated. Growing
+replaces the arrays one at a time, each old one freed before the next is copied, so a growth holds the old grid
+and one new array (4 bytes a cell), not two grids; the new arrays are zeroed lazily (``np.zeros``), so the
+margin costs memory only once scans reach it.
 
 Cells are indexed ``[row, col] = [iy, ix]``; cell ``(ix, iy)`` covers
 ``[origin_x + ix * resolution, origin_x + (ix + 1) * resolution)`` and likewise in y.
@@ -29,10 +33,13 @@ from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.slam.scan import BeamSplit
 
 IntArray = npt.NDArray[np.int64]
-# A grid as compiled kernels take it (LogOddsGrid.kernel_args): log-odds, hit offset sums, hit counts, origin x,
-# origin y and resolution (m); and that as a numba type.
-GridArrays = tuple[npt.NDArray[np.float32], npt.NDArray[np.float32], npt.NDArray[np.float32], float, float, float]
-GRID_ARRAYS_TYPE = "Tuple((float32[:, ::1], float32[:, :, ::1], float32[:, ::1], float64, float64, float64))"
+Float32Array = npt.NDArray[np.float32]
+# A grid as compiled kernels take it (LogOddsGrid.kernel_args): log-odds, hit offset sums in x and in y, hit
+# counts, origin x, origin y and resolution (m); and that as a numba type.
+GridArrays = tuple[Float32Array, Float32Array, Float32Array, Float32Array, float, float, float]
+GRID_ARRAYS_TYPE = (
+    "Tuple((float32[:, ::1], float32[:, ::1], float32[:, ::1], float32[:, ::1], float64, float64, float64))"
+)
 
 # map_server's default occupied_thresh 0.65 as log-odds; a cell more likely free than occupied is free.
 OCCUPIED_LOGODDS = math.log(0.65 / 0.35)
@@ -69,8 +76,10 @@ class LogOddsGrid:
         if width * height > max_cells:
             raise InvalidInputError(f"occupancy grid of {width} x {height} cells exceeds the limit of {max_cells:,}")
         self.logodds = np.zeros((height, width), dtype=np.float32)
-        # Sum of end point offsets from the cell's corner (m) and end point count per cell, for the mean hit.
-        self.hit_sum = np.zeros((2, height, width), dtype=np.float32)
+        # Sums of end point offsets from the cell's corner in x and in y (m) and end point count per cell, for
+        # the mean hit.
+        self.hit_x = np.zeros((height, width), dtype=np.float32)
+        self.hit_y = np.zeros((height, width), dtype=np.float32)
         self.hit_count = np.zeros((height, width), dtype=np.float32)
 
     @property
@@ -89,9 +98,12 @@ class LogOddsGrid:
 
     def clear(self) -> None:
         """Forget everything observed (the extent stays)."""
-        self.logodds[:] = 0.0
-        self.hit_sum[:] = 0.0
-        self.hit_count[:] = 0.0
+        # Fresh arrays, not zeros written over the old: the map rebuilt next makes only what it reaches resident.
+        shape = self.logodds.shape
+        self.logodds = np.zeros(shape, dtype=np.float32)
+        self.hit_x = np.zeros(shape, dtype=np.float32)
+        self.hit_y = np.zeros(shape, dtype=np.float32)
+        self.hit_count = np.zeros(shape, dtype=np.float32)
 
     def ensure_contains(self, xmin: float, ymin: float, xmax: float, ymax: float) -> None:
         """Grow the grid (if allowed) so that the box lies inside, with a margin to avoid growing every scan."""
@@ -116,9 +128,11 @@ class LogOddsGrid:
                 f"the map would grow to {cells:.3g} cells to hold x {xmin:.6g}..{xmax:.6g}, "
                 f"y {ymin:.6g}..{ymax:.6g} m, more than the limit of {self.max_cells:,}"
             )
-        self.logodds = np.pad(self.logodds, pad)
-        self.hit_sum = np.pad(self.hit_sum, [(0, 0), *pad])
-        self.hit_count = np.pad(self.hit_count, pad)
+        # One array at a time, each assignment freeing the old one (module docstring); nothing else holds them.
+        self.logodds = _grown(self.logodds, pad)
+        self.hit_x = _grown(self.hit_x, pad)
+        self.hit_y = _grown(self.hit_y, pad)
+        self.hit_count = _grown(self.hit_count, pad)
         self.origin_x -= pad[1][0] * res
         self.origin_y -= pad[0][0] * res
 
@@ -146,13 +160,13 @@ class LogOddsGrid:
         count = self.hit_count[iy, ix].astype(np.float64)
         res = self.resolution
         safe = np.maximum(count, 1.0)
-        dx = np.where(count > 0, self.hit_sum[0, iy, ix] / safe, 0.5 * res)
-        dy = np.where(count > 0, self.hit_sum[1, iy, ix] / safe, 0.5 * res)
+        dx = np.where(count > 0, self.hit_x[iy, ix] / safe, 0.5 * res)
+        dy = np.where(count > 0, self.hit_y[iy, ix] / safe, 0.5 * res)
         return self.origin_x + ix * res + dx, self.origin_y + iy * res + dy
 
     def kernel_args(self) -> GridArrays:
         """The grid's arrays and geometry, for compiled kernels (they see the arrays, not copies)."""
-        return self.logodds, self.hit_sum, self.hit_count, self.origin_x, self.origin_y, self.resolution
+        return self.logodds, self.hit_x, self.hit_y, self.hit_count, self.origin_x, self.origin_y, self.resolution
 
     def occupied(self) -> npt.NDArray[np.bool_]:
         """Cells that are more likely occupied than free (what the scan matcher aligns to)."""
@@ -164,6 +178,19 @@ class LogOddsGrid:
         out[self.logodds >= OCCUPIED_LOGODDS] = 100
         out[self.logodds < FREE_LOGODDS] = 0
         return out
+
+
+def _grown(array: Float32Array, pad: list[tuple[int, int]]) -> Float32Array:
+    """``array`` with ``pad`` (rows before and after, columns before and after) cells of zeros around it.
+
+    Why not np.pad: it writes the zeros, so the whole margin becomes resident at once; np.zeros' pages are
+    mapped only when first written.
+    """
+    (bottom, top), (left, right) = pad
+    height, width = array.shape
+    out = np.zeros((height + bottom + top, width + left + right), dtype=array.dtype)
+    out[bottom : bottom + height, left : left + width] = array
+    return out
 
 
 _FREE, _HIT = 1, 2  # what one scan says of a cell
@@ -186,7 +213,7 @@ def _integrate(  # noqa: PLR0917 - numba kernels take positional arguments
 ) -> None:
     """LogOddsGrid.integrate's ray casting: beams from ``sensor`` (m) in directions ``(cos, sin)`` of length
     ``ranges`` (m), the first ``n_hit`` ending on an obstacle; ``update``: lfree, loccupied, lmax."""
-    logodds, hit_sum, hit_count, origin_x, origin_y, res = grid
+    logodds, hit_x, hit_y, hit_count, origin_x, origin_y, res = grid
     height, width = logodds.shape
     sx, sy = sensor
     lfree, loccupied, lmax = update[0], update[1], update[2]
@@ -210,8 +237,8 @@ def _integrate(  # noqa: PLR0917 - numba kernels take positional arguments
         ix = math.floor((ex - origin_x) / res)
         iy = math.floor((ey - origin_y) / res)
         if 0 <= ix < width and 0 <= iy < height:
-            hit_sum[0, iy, ix] += ex - (origin_x + ix * res)
-            hit_sum[1, iy, ix] += ey - (origin_y + iy * res)
+            hit_x[iy, ix] += ex - (origin_x + ix * res)
+            hit_y[iy, ix] += ey - (origin_y + iy * res)
             hit_count[iy, ix] += 1.0
             mark[iy - y_lo, ix - x_lo] = _HIT
     # Every beam sampled at half a cell up to half a cell before its end, so no crossed cell is skipped on

@@ -307,11 +307,11 @@ _SURFACE_ARGS = "Tuple((float64, float64, int32[:, ::1], int32[:, ::1], " + GRID
 @numba.njit("UniTuple(float64, 2)(" + GRID_ARRAYS_TYPE + ", int64, int64)", cache=True)  # type: ignore[misc]
 def _mean_hit(grid: GridArrays, iy: int, ix: int) -> tuple[float, float]:
     """LogOddsGrid.mean_hits of one cell."""
-    _, hit_sum, hit_count, origin_x, origin_y, res = grid
+    _, hit_x, hit_y, hit_count, origin_x, origin_y, res = grid
     # np.float64, not float(): numba's float() of a float32 stays float32, and so would the division.
     count = np.float64(hit_count[iy, ix])
-    dx = np.float64(hit_sum[0, iy, ix]) / count if count > 0.0 else 0.5 * res
-    dy = np.float64(hit_sum[1, iy, ix]) / count if count > 0.0 else 0.5 * res
+    dx = np.float64(hit_x[iy, ix]) / count if count > 0.0 else 0.5 * res
+    dy = np.float64(hit_y[iy, ix]) / count if count > 0.0 else 0.5 * res
     return float(origin_x + ix * res + dx), float(origin_y + iy * res + dy)
 
 
@@ -319,7 +319,7 @@ def _mean_hit(grid: GridArrays, iy: int, ix: int) -> tuple[float, float]:
 def _normal_at(grid: GridArrays, iy: int, ix: int) -> float:
     """Surface normal angle (rad) at grid cell ``(iy, ix)`` from the principal axes of the mean hits of the
     occupied cells within ``NORMAL_RADIUS`` (clipped at the grid's edge); NaN where fewer than 3 are."""
-    logodds, _, hit_count, _, _, _ = grid
+    logodds, _, _, hit_count, _, _, _ = grid
     height, width = logodds.shape
     size = 2 * NORMAL_RADIUS + 1
     px = np.empty(size * size)
@@ -354,7 +354,7 @@ def _surface(
 ) -> tuple[float, float, float]:
     """DistanceField.nearest_surface of one point: mean hit (m) of the nearest occupied cell, normal (rad)."""
     field_x, field_y, near_iy, near_ix, grid = surface
-    res = grid[5]
+    res = grid[6]
     height, width = near_iy.shape
     ix = min(max(math.floor((x - field_x) / res), 0), width - 1)
     iy = min(max(math.floor((y - field_y) / res), 0), height - 1)
@@ -399,7 +399,7 @@ def _refine(  # noqa: PLR0917 - numba kernels take positional arguments
     odometry prior ``prior``; the refined pose (yaw not wrapped)."""
     x, y, yaw = start
     prior_x, prior_y, prior_yaw = prior
-    res = surface[4][5]
+    res = surface[4][6]
     n_points = points.shape[0]
     cutoff = 4.0 * res  # pairs farther apart than this are not the same surface
     huber = 0.5 * res

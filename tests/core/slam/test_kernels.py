@@ -39,8 +39,8 @@ def random_grid(rng: np.random.Generator) -> LogOddsGrid:
         ix, iy = grid.cell_of(hits[:, 0], hits[:, 1])
         inside = (ix >= 0) & (ix < grid.width) & (iy >= 0) & (iy < grid.height)
         ix, iy, hits = ix[inside], iy[inside], hits[inside]
-        np.add.at(grid.hit_sum[0], (iy, ix), hits[:, 0] - (grid.origin_x + ix * RES))
-        np.add.at(grid.hit_sum[1], (iy, ix), hits[:, 1] - (grid.origin_y + iy * RES))
+        np.add.at(grid.hit_x, (iy, ix), hits[:, 0] - (grid.origin_x + ix * RES))
+        np.add.at(grid.hit_y, (iy, ix), hits[:, 1] - (grid.origin_y + iy * RES))
         np.add.at(grid.hit_count, (iy, ix), 1.0)
         grid.logodds[iy, ix] = 2.0
     scattered = rng.integers(0, grid.logodds.size, 60)
@@ -174,8 +174,8 @@ def reference_integrate(grid: LogOddsGrid, sensor: Pose2D, beams: BeamSplit) -> 
     occ_ix, occ_iy = grid.cell_of(ends_x[:n_hit], ends_y[:n_hit])
     keep = (occ_ix >= 0) & (occ_ix < grid.width) & (occ_iy >= 0) & (occ_iy < grid.height)
     occ_ix, occ_iy = occ_ix[keep], occ_iy[keep]
-    np.add.at(grid.hit_sum[0], (occ_iy, occ_ix), ends_x[:n_hit][keep] - (grid.origin_x + occ_ix * res))
-    np.add.at(grid.hit_sum[1], (occ_iy, occ_ix), ends_y[:n_hit][keep] - (grid.origin_y + occ_iy * res))
+    np.add.at(grid.hit_x, (occ_iy, occ_ix), ends_x[:n_hit][keep] - (grid.origin_x + occ_ix * res))
+    np.add.at(grid.hit_y, (occ_iy, occ_ix), ends_y[:n_hit][keep] - (grid.origin_y + occ_iy * res))
     np.add.at(grid.hit_count, (occ_iy, occ_ix), 1.0)
     keep = (free_ix >= 0) & (free_ix < grid.width) & (free_iy >= 0) & (free_iy < grid.height)
     free = np.zeros(grid.logodds.shape, dtype=bool)
@@ -301,4 +301,5 @@ def test_integrate_equals_the_numpy_reference(seed):
     assert (reference.hit_count > 1).sum() > 100  # cells hit more than once
     np.testing.assert_array_equal(grid.logodds, reference.logodds)
     np.testing.assert_array_equal(grid.hit_count, reference.hit_count)
-    np.testing.assert_array_equal(grid.hit_sum, reference.hit_sum)
+    np.testing.assert_array_equal(grid.hit_x, reference.hit_x)
+    np.testing.assert_array_equal(grid.hit_y, reference.hit_y)
