@@ -21,7 +21,6 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 import numpy.typing as npt
-from scipy import ndimage
 from scipy.spatial import cKDTree
 
 from mrs_nav.errors import InvalidInputError
@@ -44,8 +43,6 @@ def free_endpoint_fraction(slam: Slam) -> float:
     """Share of the processed scans' end points on free cells, away from any wall, of the final map (0 if
     there are none)."""
     grid = slam.grid
-    # Free and not next to an occupied cell (3 x 3 neighbourhood).
-    stray = (grid.logodds < 0.0) & ~ndimage.binary_dilation(grid.logodds > 0.0, np.ones((3, 3), dtype=bool))
     on_free = total = 0
     for record in slam.processed:
         if record.beams is None or record.beams.hit_ranges.size == 0:
@@ -56,8 +53,13 @@ def free_endpoint_fraction(slam: Slam) -> float:
         x = sensor.x + beams.hit_ranges * np.cos(angles)
         y = sensor.y + beams.hit_ranges * np.sin(angles)
         ix, iy = grid.cell_of(x, y)
-        inside = (ix >= 0) & (ix < grid.width) & (iy >= 0) & (iy < grid.height)
-        on_free += int(np.count_nonzero(stray[iy[inside], ix[inside]]))
+        # Free and not next to an occupied cell (3 x 3 neighbourhood), looked up at the end points only: the
+        # whole map as dense arrays would cost more than the map's tiles (mrs_nav.slam.grid).
+        stray = grid.logodds_at(iy, ix) < 0.0
+        for dy in (-1, 0, 1):
+            for dx in (-1, 0, 1):
+                stray &= grid.logodds_at(iy + dy, ix + dx) <= 0.0
+        on_free += int(np.count_nonzero(stray))
         total += int(x.size)
     return on_free / total if total else 0.0
 

@@ -57,14 +57,14 @@ def test_slam_corrects_noisy_odometry_on_a_loop():
 def test_corrupt_scans_fall_back_to_odometry(ranges):
     slam = Slam(SlamConfig(linearUpdate=0.0, angularUpdate=0.0))
     slam.add_scan(Pose2D(0.0, 0.0, 0.0), cast(Pose2D(0.0, 0.0, 0.0)), 0.0)
-    before = slam.grid.logodds.copy()
+    before = slam.grid.dense()[0]
     odom = Pose2D(0.3, 0.0, 0.1)
     bad = LaserScanData(-math.pi, 2 * math.pi / 360, 0.12, 3.5, ranges)
     done = slam.add_scan(odom, bad, 1.0)
     assert done is not None
     if ranges.size != 17:  # 17 beams at 1 m are a (wrong but) valid scan: it may be matched and mapped
         assert astuple(done.pose) == pytest.approx(astuple(odom))
-        assert np.array_equal(before, slam.grid.logodds)
+        assert np.array_equal(before, slam.grid.dense()[0])
 
 
 def test_update_gates():
@@ -145,10 +145,10 @@ def test_the_map_rebuilt_from_the_kept_beams_is_the_map_built_online():
         noisy = exact.ranges + rng.normal(0.0, 0.01, exact.ranges.size)
         scan = LaserScanData(exact.angle_min, exact.angle_increment, exact.range_min, exact.range_max, noisy)
         slam.add_scan(pose, scan, float(i))
-    online = slam.grid.logodds.copy()
+    online = slam.grid.dense()[0]
     slam.rebuild_map()
     # float32 rounding moves an end point across a cell border now and then (4 of 17,105 observed cells here).
-    assert np.count_nonzero(slam.grid.logodds != online) <= 1e-3 * np.count_nonzero(online)
+    assert np.count_nonzero(slam.grid.dense()[0] != online) <= 1e-3 * np.count_nonzero(online)
     scan_bytes = 360 * 8 * 2  # a 360-beam scan's angles and ranges in float64
     kept = max(r.beams.nbytes for r in slam.processed if r.beams is not None)
     assert kept <= scan_bytes / 2
