@@ -25,9 +25,12 @@ from mrs_nav.errors import InvalidInputError
 from mrs_nav.resources import CONFIG_DIR
 
 DEFAULTS_FILE = CONFIG_DIR / "slam.yaml"
-# Cells of the occupancy grid at most (16 bytes each: log-odds, mean hit offset, hit count): 400 MB, e.g.
-# 1 km x 1 km at 20 cm or 316 m x 316 m at 5 cm. The map grows only where scans reach; past this it refuses.
-MAX_MAP_CELLS = 25_000_000
+# Cells the occupancy grid may span at most, e.g. 1.4 km x 1.4 km at 20 cm or 350 m x 350 m at 5 cm (the MIT
+# Infinite Corridor map spans 49 M, its 1941 scans all processed). The map grows only where scans reach; past this
+# it refuses. Memory follows the cells scans reached (mrs_nav.slam.grid: 4 bytes a cell, 12 more near end points;
+# the Freiburg campus map holds 15 M of the 32 M it spans), but the map saved and drawn is dense: 1 byte a cell,
+# a few more while it is written.
+MAX_MAP_CELLS = 50_000_000
 MAX_COORDINATE_M = 100_000.0  # m: a map frame coordinate farther out than 100 km is an error, not a building
 
 # (lowest, highest) accepted value of each numeric parameter, with its unit in the field documentation.

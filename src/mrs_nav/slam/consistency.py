@@ -32,11 +32,11 @@ from collections.abc import Callable, Iterator, Sequence
 
 import numpy as np
 import numpy.typing as npt
-from scipy import ndimage
 from scipy.spatial import cKDTree
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D
+from mrs_nav.slam.grid import LogOddsGrid
 from mrs_nav.slam.matcher import thin_points
 from mrs_nav.slam.slam import Slam
 
@@ -62,14 +62,10 @@ Qualifier = Callable[[npt.NDArray[np.int64], npt.NDArray[np.int64]], npt.NDArray
 def free_endpoint_fraction(slam: Slam) -> float:
     """Share of the processed scans' end points on free cells, away from any wall, of the final map (0 if
     there are none)."""
-    grid = slam.grid
-    # Free and not next to an occupied cell (3 x 3 neighbourhood).
-    stray = (grid.logodds < 0.0) & ~ndimage.binary_dilation(grid.logodds > 0.0, np.ones((3, 3), dtype=bool))
+    near = np.ones((3, 3), dtype=bool)  # free and not next to an occupied cell
     on_free = total = 0
     for xy in _placed_hits(slam):
-        ix, iy = grid.cell_of(xy[:, 0], xy[:, 1])
-        inside = (ix >= 0) & (ix < grid.width) & (iy >= 0) & (iy < grid.height)
-        on_free += int(np.count_nonzero(stray[iy[inside], ix[inside]]))
+        on_free += int(np.count_nonzero(_stray(slam.grid, xy, near)))
         total += int(xy.shape[0])
     return on_free / total if total else 0.0
 
@@ -79,18 +75,13 @@ def doubled_wall_fraction(slam: Slam) -> float:
     more than :data:`WALL_TOLERANCE_M` from any occupied cell, in pieces at least :data:`WALL_PIECE_M` long: runs
     of consecutive end points of one scan, each within :data:`WALL_GAP_M` of the one before, measured from the
     first to the last. Moving people leave shorter pieces, doubled or turned walls do not."""
-    grid = slam.grid
-    reach = max(1, math.floor(WALL_TOLERANCE_M / grid.resolution + 1e-9))
+    reach = max(1, math.floor(WALL_TOLERANCE_M / slam.grid.resolution + 1e-9))
     offsets = np.arange(-reach, reach + 1)
-    disc = np.hypot(offsets[:, None], offsets[None, :]) <= reach
-    stray = (grid.logodds < 0.0) & ~ndimage.binary_dilation(grid.logodds > 0.0, disc)
+    near = np.hypot(offsets[:, None], offsets[None, :]) <= reach
     on_walls = total = 0
     for xy in _placed_hits(slam):
         total += int(xy.shape[0])
-        ix, iy = grid.cell_of(xy[:, 0], xy[:, 1])
-        inside = (ix >= 0) & (ix < grid.width) & (iy >= 0) & (iy < grid.height)
-        flagged = np.zeros(ix.size, dtype=bool)
-        flagged[inside] = stray[iy[inside], ix[inside]]
+        flagged = _stray(slam.grid, xy, near)
         if not flagged.any():
             continue
         joined = flagged[1:] & flagged[:-1] & (np.hypot(*np.diff(xy, axis=0).T) <= WALL_GAP_M)
@@ -99,6 +90,18 @@ def doubled_wall_fraction(slam: Slam) -> float:
         long = np.hypot(*(xy[last] - xy[first]).T) >= WALL_PIECE_M
         on_walls += int((last - first + 1)[long].sum())
     return on_walls / total if total else 0.0
+
+
+def _stray(grid: LogOddsGrid, xy: FloatArray, near: npt.NDArray[np.bool_]) -> npt.NDArray[np.bool_]:
+    """Whether each point (N x 2, m) lies on a free cell with no occupied cell among the cells ``near`` it (a
+    square mask centred on the point's cell), looked up at the points only: the whole map as dense arrays would
+    cost more than the map's tiles (:mod:`mrs_nav.slam.grid`). Points off the map are not stray."""
+    ix, iy = grid.cell_of(xy[:, 0], xy[:, 1])
+    stray = grid.logodds_at(iy, ix) < 0.0
+    reach = near.shape[0] // 2
+    for dy, dx in np.argwhere(near) - reach:
+        stray &= grid.logodds_at(iy + dy, ix + dx) <= 0.0
+    return stray
 
 
 def _placed_hits(slam: Slam) -> Iterator[FloatArray]:

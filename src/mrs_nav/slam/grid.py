@@ -7,7 +7,19 @@ point is never cleared by the same scan, so the update does not depend on the an
 
 Like gmapping's point accumulator, each cell also keeps the mean of the end points that fell in it, so the scan
 matcher can align to where obstacles were seen rather than to cell centres (sub-cell accuracy). The sums are of
-offsets from the cell's corner, so float32 keeps them exact to micrometres: 16 bytes a cell in all.
+offsets from the cell's corner, so float32 keeps them exact to micrometres.
+
+Storage is in tiles of :data:`TILE` x :data:`TILE` cells, allocated when a scan first reaches them: log-odds
+(4 bytes a cell) in every tile a beam crossed, the hit sums and counts (12 bytes a cell) only in tiles holding
+an end point. Why: the map spans the bounding box of what scans reached, and a long corridor or a campus leaves
+most of that box unseen: a dense 16-byte grid of the box took 0.8-0.9 GB on the MIT Infinite Corridor and
+Freiburg campus logs and refused scans past its 25 M-cell limit (242 of campus's 2008), where the tiles take
+0.1-0.2 GB and the whole replay stays under 0.5 GB with every scan processed.
+Tiles are pooled in arrays that grow by half when full (one array at a time, old copies freed before the next
+grows), so compiled kernels index them directly: with ``(gy, gx) = (iy + shift_y, ix + shift_x)``, cell
+``(iy, ix)`` is at ``pool[table[gy // TILE, gx // TILE], gy % TILE, gx % TILE]``, and a cell of no tile is unknown
+(log-odds 0, no hits). The shift (less than a tile) lets the grid grow by whole cells as before tiling, so its
+origin, and every coordinate computed from it, stays what it was: the same scans give the same map and poses.
 
 The grid covers the bounding box of what scans have reached (plus a growth margin), never more than
 ``max_cells`` cells: growth past that raises :class:`InvalidInputError` before anything is allocated.
@@ -29,18 +41,33 @@ from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.slam.scan import BeamSplit
 
 IntArray = npt.NDArray[np.int64]
-# A grid as compiled kernels take it (LogOddsGrid.kernel_args): log-odds, hit offset sums, hit counts, origin x,
-# origin y and resolution (m); and that as a numba type.
-GridArrays = tuple[npt.NDArray[np.float32], npt.NDArray[np.float32], npt.NDArray[np.float32], float, float, float]
-GRID_ARRAYS_TYPE = "Tuple((float32[:, ::1], float32[:, :, ::1], float32[:, ::1], float64, float64, float64))"
+Float32Array = npt.NDArray[np.float32]
+TileTable = npt.NDArray[np.int32]
+TILE = 8  # cells a tile side: 0.4 m at 5 cm, so that the hit tiles along a wall hold little besides it
+# (mrs_nav.slam.matcher's kernels compile TILE in, and numba's cache of them does not see it change here: after
+# changing it, delete the cached kernels, mrs_nav/slam/__pycache__/*.nbi and *.nbc.)
+# A grid's cells (LogOddsGrid.cells): height, width, and the shift of cell (0, 0) into its tile, rows and columns.
+GridCells = tuple[int, int, int, int]
+# A grid as compiled kernels take it (LogOddsGrid.kernel_args): the log-odds tile table and pool, the hit tile
+# table, the pools of hit offset sums in x and in y and of hit counts, its cells, origin x, origin y and
+# resolution (m); and that as a numba type.
+GridArrays = tuple[
+    TileTable, Float32Array, TileTable, Float32Array, Float32Array, Float32Array, GridCells, float, float, float
+]
+_POOL = "float32[:, :, ::1]"
+GRID_ARRAYS_TYPE = (
+    f"Tuple((int32[:, ::1], {_POOL}, int32[:, ::1], {_POOL}, {_POOL}, {_POOL}, UniTuple(int64, 4), "
+    "float64, float64, float64))"
+)
 
+GROWTH_MARGIN_MAX_M = 20.0  # m, the widest margin a growing grid adds (ensure_contains)
 # map_server's default occupied_thresh 0.65 as log-odds; a cell more likely free than occupied is free.
 OCCUPIED_LOGODDS = math.log(0.65 / 0.35)
 FREE_LOGODDS = 0.0
 
 
 class LogOddsGrid:
-    """A growable log-odds occupancy grid in the map frame."""
+    """A growable log-odds occupancy grid in the map frame, stored in tiles (module docstring)."""
 
     def __init__(
         self,
@@ -51,7 +78,7 @@ class LogOddsGrid:
         lfree: float = 0.4,
         loccupied: float = 0.9,
         lmax: float = 8.0,
-        max_cells: int = 25_000_000,
+        max_cells: int = 50_000_000,
     ) -> None:
         xmin, ymin, xmax, ymax = extent
         if resolution <= 0.0 or xmax <= xmin or ymax <= ymin:
@@ -64,22 +91,29 @@ class LogOddsGrid:
         self.max_cells = max_cells
         self.origin_x = math.floor(xmin / resolution) * resolution
         self.origin_y = math.floor(ymin / resolution) * resolution
-        width = math.ceil((xmax - self.origin_x) / resolution)
-        height = math.ceil((ymax - self.origin_y) / resolution)
-        if width * height > max_cells:
-            raise InvalidInputError(f"occupancy grid of {width} x {height} cells exceeds the limit of {max_cells:,}")
-        self.logodds = np.zeros((height, width), dtype=np.float32)
-        # Sum of end point offsets from the cell's corner (m) and end point count per cell, for the mean hit.
-        self.hit_sum = np.zeros((2, height, width), dtype=np.float32)
-        self.hit_count = np.zeros((height, width), dtype=np.float32)
+        self.width = math.ceil((xmax - self.origin_x) / resolution)
+        self.height = math.ceil((ymax - self.origin_y) / resolution)
+        if self.width * self.height > max_cells:
+            raise InvalidInputError(
+                f"occupancy grid of {self.width} x {self.height} cells exceeds the limit of {max_cells:,}"
+            )
+        self.shift_y = self.shift_x = 0  # of cell (0, 0) into its tile (module docstring)
+        # Pool slot of each tile's log-odds and of its hit sums and counts; -1: none yet.
+        shape = (-(-self.height // TILE), -(-self.width // TILE))
+        self.table = np.full(shape, -1, dtype=np.int32)
+        self.hit_table = np.full(shape, -1, dtype=np.int32)
+        self.tiles = np.zeros(2, dtype=np.int64)  # pool slots in use: log-odds, hits
+        self.logodds = _pool(0)
+        # Sums of end point offsets from the cell's corner in x and in y (m) and end point count per cell, for
+        # the mean hit.
+        self.hit_x = _pool(0)
+        self.hit_y = _pool(0)
+        self.hit_count = _pool(0)
 
     @property
-    def width(self) -> int:
-        return int(self.logodds.shape[1])
-
-    @property
-    def height(self) -> int:
-        return int(self.logodds.shape[0])
+    def cells(self) -> GridCells:
+        """Height, width and the shift of cell (0, 0) into its tile (rows, columns), for the kernels."""
+        return self.height, self.width, self.shift_y, self.shift_x
 
     def cell_of(self, x: FloatArray, y: FloatArray) -> tuple[IntArray, IntArray]:
         """Cell indices ``(ix, iy)`` of points in metres (may lie outside the grid)."""
@@ -89,12 +123,19 @@ class LogOddsGrid:
 
     def clear(self) -> None:
         """Forget everything observed (the extent stays)."""
-        self.logodds[:] = 0.0
-        self.hit_sum[:] = 0.0
-        self.hit_count[:] = 0.0
+        self.table[:] = -1
+        self.hit_table[:] = -1
+        self.tiles[:] = 0
+        # Fresh pools (zeroed lazily), not zeros written over the old ones: tiles are taken from them as zeros.
+        self.logodds = _pool(len(self.logodds))
+        self.hit_x = _pool(len(self.hit_x))
+        self.hit_y = _pool(len(self.hit_y))
+        self.hit_count = _pool(len(self.hit_count))
 
     def ensure_contains(self, xmin: float, ymin: float, xmax: float, ymax: float) -> None:
-        """Grow the grid (if allowed) so that the box lies inside, with a margin to avoid growing every scan."""
+        """Grow the grid (if allowed) so that the box lies inside, with a margin to avoid growing every scan.
+
+        Growing copies only the tile tables (4 bytes a tile); the tiles stay where they are."""
         if not self.grows:
             return
         res = self.resolution
@@ -104,8 +145,11 @@ class LogOddsGrid:
         top = max(0, math.ceil((ymax - (self.origin_y + self.height * res)) / res) + 1)
         if left == bottom == right == top == 0:
             return
-        # A margin so that a slowly growing map is not copied every scan; dropped near the cell limit.
-        for margin in (max(int(5.0 / res), self.width // 4, self.height // 4), 0):
+        # A margin so that a slowly growing map does not grow every scan, at most GROWTH_MARGIN_MAX_M (a quarter
+        # of a 300 m map on each side it grew to reached the cell limit on the MIT Infinite Corridor log, little of
+        # it ever seen); dropped near the cell limit.
+        cap = int(GROWTH_MARGIN_MAX_M / res)
+        for margin in (max(int(5.0 / res), min(max(self.width // 4, self.height // 4), cap)), 0):
             pad = [(bottom + margin if bottom else 0, top + margin if top else 0)]
             pad.append((left + margin if left else 0, right + margin if right else 0))
             cells = (self.height + sum(pad[0])) * (self.width + sum(pad[1]))
@@ -116,11 +160,23 @@ class LogOddsGrid:
                 f"the map would grow to {cells:.3g} cells to hold x {xmin:.6g}..{xmax:.6g}, "
                 f"y {ymin:.6g}..{ymax:.6g} m, more than the limit of {self.max_cells:,}"
             )
-        self.logodds = np.pad(self.logodds, pad)
-        self.hit_sum = np.pad(self.hit_sum, [(0, 0), *pad])
-        self.hit_count = np.pad(self.hit_count, pad)
-        self.origin_x -= pad[1][0] * res
-        self.origin_y -= pad[0][0] * res
+        # Whole tiles before the old ones for the cells added before them, the rest taken up by the shift.
+        (before_y, after_y), (before_x, after_x) = pad
+        tiles_before_y = max(0, -(-(before_y - self.shift_y) // TILE))
+        tiles_before_x = max(0, -(-(before_x - self.shift_x) // TILE))
+        self.shift_y += tiles_before_y * TILE - before_y
+        self.shift_x += tiles_before_x * TILE - before_x
+        self.height += before_y + after_y
+        self.width += before_x + after_x
+        tiles_y, tiles_x = self.table.shape
+        table_pad = [
+            (tiles_before_y, -(-(self.height + self.shift_y) // TILE) - tiles_before_y - tiles_y),
+            (tiles_before_x, -(-(self.width + self.shift_x) // TILE) - tiles_before_x - tiles_x),
+        ]
+        self.table = np.pad(self.table, table_pad, constant_values=-1)
+        self.hit_table = np.pad(self.hit_table, table_pad, constant_values=-1)
+        self.origin_x -= before_x * res
+        self.origin_y -= before_y * res
 
     def integrate(self, sensor: Pose2D, beams: BeamSplit) -> None:
         """Update the grid with one scan taken from ``sensor`` (laser pose in the map frame)."""
@@ -131,39 +187,194 @@ class LogOddsGrid:
         cos, sin = np.cos(angles), np.sin(angles)
         ends_x = sensor.x + ranges * cos
         ends_y = sensor.y + ranges * sin
-        self.ensure_contains(
+        box = (
             min(sensor.x, float(ends_x.min())),
             min(sensor.y, float(ends_y.min())),
             max(sensor.x, float(ends_x.max())),
             max(sensor.y, float(ends_y.max())),
         )
+        self.ensure_contains(*box)
+        # Room for every tile the scan can reach (its box, clipped to the grid) and one hit tile per end point:
+        # the kernel takes its new tiles from the pools' spare slots.
+        ix, iy = self.cell_of(np.array([box[0], box[2]]), np.array([box[1], box[3]]))
+        tx0, tx1 = ((min(max(int(i), 0), self.width - 1) + self.shift_x) // TILE for i in ix)
+        ty0, ty1 = ((min(max(int(i), 0), self.height - 1) + self.shift_y) // TILE for i in iy)
+        # A tile more each side: the kernel's cell arithmetic may round across a tile edge this one did not.
+        reach = (tx1 - tx0 + 3) * (ty1 - ty0 + 3)
+        self._reserve(reach, beams.hit_ranges.size)
         # float32 like the log-odds, so that the updates round as the grid's own arithmetic does
         update = np.array([self.lfree, self.loccupied, self.lmax], dtype=np.float32)
-        _integrate(self.kernel_args(), (sensor.x, sensor.y), cos, sin, ranges, beams.hit_ranges.size, update)
+        args = self.kernel_args()
+        _integrate(args, self.tiles, (sensor.x, sensor.y), cos, sin, ranges, beams.hit_ranges.size, update)
+
+    def _reserve(self, tiles: int, hit_tiles: int) -> None:
+        """Grow the pools (by half at least) so that ``tiles`` log-odds and ``hit_tiles`` hit tiles are spare."""
+        used, hits = int(self.tiles[0]), int(self.tiles[1])
+        if used + tiles > len(self.logodds):
+            self.logodds = _grown(self.logodds, used, used + tiles)
+        if hits + hit_tiles > len(self.hit_count):
+            # One pool at a time: each assignment frees the old pool before the next is copied.
+            self.hit_x = _grown(self.hit_x, hits, hits + hit_tiles)
+            self.hit_y = _grown(self.hit_y, hits, hits + hit_tiles)
+            self.hit_count = _grown(self.hit_count, hits, hits + hit_tiles)
+
+    def logodds_at(self, iy: IntArray, ix: IntArray) -> Float32Array:
+        """Log-odds of cells ``(iy, ix)`` (0 outside the grid and where nothing was seen)."""
+        return _lookup(self.table, self.logodds, self.cells, iy, ix)
 
     def mean_hits(self, iy: IntArray, ix: IntArray) -> tuple[FloatArray, FloatArray]:
         """Mean end point (m) of cells ``(iy, ix)``; the cell centre where nothing was hit."""
-        count = self.hit_count[iy, ix].astype(np.float64)
+        count = _lookup(self.hit_table, self.hit_count, self.cells, iy, ix).astype(np.float64)
         res = self.resolution
         safe = np.maximum(count, 1.0)
-        dx = np.where(count > 0, self.hit_sum[0, iy, ix] / safe, 0.5 * res)
-        dy = np.where(count > 0, self.hit_sum[1, iy, ix] / safe, 0.5 * res)
+        dx = np.where(count > 0, _lookup(self.hit_table, self.hit_x, self.cells, iy, ix) / safe, 0.5 * res)
+        dy = np.where(count > 0, _lookup(self.hit_table, self.hit_y, self.cells, iy, ix) / safe, 0.5 * res)
         return self.origin_x + ix * res + dx, self.origin_y + iy * res + dy
 
+    def window(self, y0: int, y1: int, x0: int, x1: int) -> Float32Array:
+        """Log-odds of the cells ``[y0, y1) x [x0, x1)`` (inside the grid) as a dense array."""
+        out: Float32Array = _window(self.table, self.logodds, self.cells, (y0, y1), (x0, x1))
+        return out
+
+    def dense(self) -> tuple[Float32Array, Float32Array, Float32Array, Float32Array]:
+        """The whole grid as dense arrays: log-odds, hit offset sums in x and in y, hit counts (for tests and
+        small grids: 16 bytes a cell of the bounding box)."""
+        return (
+            self.window(0, self.height, 0, self.width),
+            _window(self.hit_table, self.hit_x, self.cells, (0, self.height), (0, self.width)),
+            _window(self.hit_table, self.hit_y, self.cells, (0, self.height), (0, self.width)),
+            _window(self.hit_table, self.hit_count, self.cells, (0, self.height), (0, self.width)),
+        )
+
+    def assign(self, logodds: Float32Array, hit_x: Float32Array, hit_y: Float32Array, hit_count: Float32Array) -> None:
+        """Set the whole grid from dense arrays of its shape (what :meth:`dense` returns)."""
+        self.clear()
+        shape = (self.table.shape[0], TILE, self.table.shape[1], TILE)
+        rows = slice(self.shift_y, self.shift_y + self.height)
+        cols = slice(self.shift_x, self.shift_x + self.width)
+        for table, pools, index in (
+            (self.table, [logodds], 0),
+            (self.hit_table, [hit_x, hit_y, hit_count], 1),
+        ):
+            tiles = []
+            for array in pools:
+                covering = np.zeros((shape[0] * TILE, shape[2] * TILE), dtype=np.float32)  # the tables' cells
+                covering[rows, cols] = array
+                tiles.append(covering.reshape(shape).transpose(0, 2, 1, 3))
+            ty, tx = np.nonzero(np.any([t.any(axis=(2, 3)) for t in tiles], axis=0))
+            table[ty, tx] = np.arange(ty.size, dtype=np.int32)
+            self.tiles[index] = ty.size
+            if index == 0:
+                self.logodds = np.ascontiguousarray(tiles[0][ty, tx])
+            else:
+                self.hit_x, self.hit_y, self.hit_count = (np.ascontiguousarray(t[ty, tx]) for t in tiles)
+
     def kernel_args(self) -> GridArrays:
-        """The grid's arrays and geometry, for compiled kernels (they see the arrays, not copies)."""
-        return self.logodds, self.hit_sum, self.hit_count, self.origin_x, self.origin_y, self.resolution
+        """The grid's tables, pools and geometry, for compiled kernels (they see the arrays, not copies)."""
+        return (
+            self.table,
+            self.logodds,
+            self.hit_table,
+            self.hit_x,
+            self.hit_y,
+            self.hit_count,
+            self.cells,
+            self.origin_x,
+            self.origin_y,
+            self.resolution,
+        )
 
     def occupied(self) -> npt.NDArray[np.bool_]:
         """Cells that are more likely occupied than free (what the scan matcher aligns to)."""
-        return np.asarray(self.logodds > 0.0)
+        return np.asarray(self.window(0, self.height, 0, self.width) > 0.0)
 
     def to_occupancy(self) -> npt.NDArray[np.int8]:
         """ROS ``OccupancyGrid`` values: 100 occupied (p >= 0.65), 0 free (p < 0.5), -1 unknown."""
-        out = np.full(self.logodds.shape, -1, dtype=np.int8)
-        out[self.logodds >= OCCUPIED_LOGODDS] = 100
-        out[self.logodds < FREE_LOGODDS] = 0
+        out: npt.NDArray[np.int8] = _occupancy(self.table, self.logodds, self.cells, OCCUPIED_LOGODDS, FREE_LOGODDS)
         return out
+
+
+def _pool(tiles: int) -> Float32Array:
+    """A pool of ``tiles`` zeroed tiles (np.zeros: pages are mapped only when first written)."""
+    return np.zeros((tiles, TILE, TILE), dtype=np.float32)
+
+
+def _grown(pool: Float32Array, used: int, needed: int) -> Float32Array:
+    """``pool`` with room for ``needed`` tiles, by half more at least; its first ``used`` tiles kept."""
+    out = _pool(max(needed, len(pool) + len(pool) // 2, 64))
+    out[:used] = pool[:used]
+    return out
+
+
+def _lookup(
+    table: TileTable, pool: Float32Array, cells: GridCells, iy: npt.ArrayLike, ix: npt.ArrayLike
+) -> Float32Array:
+    """Values of cells ``(iy, ix)`` (arrays of any integer type and shape) of a tiled array (:func:`_cells`)."""
+    rows, cols = np.broadcast_arrays(np.asarray(iy, dtype=np.int64), np.asarray(ix, dtype=np.int64))
+    flat_rows, flat_cols = np.ascontiguousarray(rows).ravel(), np.ascontiguousarray(cols).ravel()
+    out: Float32Array = _cells(table, pool, cells, flat_rows, flat_cols)
+    return out.reshape(rows.shape)
+
+
+_TILED = "int32[:, ::1], float32[:, :, ::1], UniTuple(int64, 4)"  # a tile table, its pool, the grid's cells
+
+
+@numba.njit("float32[::1](" + _TILED + ", int64[::1], int64[::1])", cache=True)  # type: ignore[misc]
+def _cells(table: TileTable, pool: Float32Array, cells: GridCells, iy: IntArray, ix: IntArray) -> Float32Array:
+    """Values of cells ``(iy, ix)`` of a tiled array; 0 outside the grid and in tiles not allocated."""
+    height, width, shift_y, shift_x = cells
+    out = np.zeros(iy.size, dtype=np.float32)
+    for k in range(iy.size):
+        if 0 <= iy[k] < height and 0 <= ix[k] < width:
+            gy, gx = iy[k] + shift_y, ix[k] + shift_x
+            slot = table[gy // TILE, gx // TILE]
+            if slot >= 0:
+                out[k] = pool[slot, gy % TILE, gx % TILE]
+    return out
+
+
+@numba.njit("float32[:, ::1](" + _TILED + ", UniTuple(int64, 2), UniTuple(int64, 2))", cache=True)  # type: ignore[misc]
+def _window(
+    table: TileTable, pool: Float32Array, cells: GridCells, rows: tuple[int, int], cols: tuple[int, int]
+) -> Float32Array:
+    """Cells ``[y0, y1) x [x0, x1)`` (``rows``, ``cols``; inside the grid) of a tiled array, densely; 0 in tiles
+    not allocated."""
+    _, _, shift_y, shift_x = cells
+    (y0, y1), (x0, x1) = rows, cols
+    out = np.zeros((max(y1 - y0, 0), max(x1 - x0, 0)), dtype=np.float32)
+    for iy in range(y0, y1):
+        for ix in range(x0, x1):
+            gy, gx = iy + shift_y, ix + shift_x
+            slot = table[gy // TILE, gx // TILE]
+            if slot >= 0:
+                out[iy - y0, ix - x0] = pool[slot, gy % TILE, gx % TILE]
+    return out
+
+
+@numba.njit("int8[:, ::1](" + _TILED + ", float64, float64)", cache=True)  # type: ignore[misc]
+def _occupancy(
+    table: TileTable, pool: Float32Array, cells: GridCells, occupied: float, free: float
+) -> npt.NDArray[np.int8]:
+    """LogOddsGrid.to_occupancy: 100 at log-odds >= ``occupied``, 0 below ``free``, -1 else and where unseen;
+    tile by tile, so that only the map's 1 byte a cell is allocated."""
+    height, width, shift_y, shift_x = cells
+    out = np.full((height, width), -1, dtype=np.int8)
+    for ty in range(table.shape[0]):
+        for tx in range(table.shape[1]):
+            slot = table[ty, tx]
+            if slot < 0:
+                continue
+            for row in range(TILE):
+                iy = ty * TILE + row - shift_y
+                for col in range(TILE):
+                    ix = tx * TILE + col - shift_x
+                    if 0 <= iy < height and 0 <= ix < width:
+                        value = pool[slot, row, col]
+                        if value >= occupied:
+                            out[iy, ix] = 100
+                        elif value < free:
+                            out[iy, ix] = 0
+    return out
 
 
 _FREE, _HIT = 1, 2  # what one scan says of a cell
@@ -172,11 +383,12 @@ _FREE, _HIT = 1, 2  # what one scan says of a cell
 @numba.njit(  # type: ignore[misc]
     "void("
     + GRID_ARRAYS_TYPE
-    + ", UniTuple(float64, 2), float64[::1], float64[::1], float64[::1], int64, float32[::1])",
+    + ", int64[::1], UniTuple(float64, 2), float64[::1], float64[::1], float64[::1], int64, float32[::1])",
     cache=True,
 )
 def _integrate(  # noqa: PLR0917 - numba kernels take positional arguments
     grid: GridArrays,
+    tiles: IntArray,
     sensor: tuple[float, float],
     cos: FloatArray,
     sin: FloatArray,
@@ -185,9 +397,10 @@ def _integrate(  # noqa: PLR0917 - numba kernels take positional arguments
     update: npt.NDArray[np.float32],
 ) -> None:
     """LogOddsGrid.integrate's ray casting: beams from ``sensor`` (m) in directions ``(cos, sin)`` of length
-    ``ranges`` (m), the first ``n_hit`` ending on an obstacle; ``update``: lfree, loccupied, lmax."""
-    logodds, hit_sum, hit_count, origin_x, origin_y, res = grid
-    height, width = logodds.shape
+    ``ranges`` (m), the first ``n_hit`` ending on an obstacle; ``update``: lfree, loccupied, lmax. New tiles are
+    taken from the pools' spare slots, counting ``tiles`` (log-odds, hits) up: the caller made room."""
+    table, logodds, hit_table, hit_x, hit_y, hit_count, cells, origin_x, origin_y, res = grid
+    height, width, shift_y, shift_x = cells
     sx, sy = sensor
     lfree, loccupied, lmax = update[0], update[1], update[2]
     # Every sample lies between the sensor and a beam's end: their bounding box, clipped to the grid, holds
@@ -210,9 +423,15 @@ def _integrate(  # noqa: PLR0917 - numba kernels take positional arguments
         ix = math.floor((ex - origin_x) / res)
         iy = math.floor((ey - origin_y) / res)
         if 0 <= ix < width and 0 <= iy < height:
-            hit_sum[0, iy, ix] += ex - (origin_x + ix * res)
-            hit_sum[1, iy, ix] += ey - (origin_y + iy * res)
-            hit_count[iy, ix] += 1.0
+            gy, gx = iy + shift_y, ix + shift_x
+            slot = hit_table[gy // TILE, gx // TILE]
+            if slot < 0:
+                slot = tiles[1]
+                tiles[1] += 1
+                hit_table[gy // TILE, gx // TILE] = slot
+            hit_x[slot, gy % TILE, gx % TILE] += ex - (origin_x + ix * res)
+            hit_y[slot, gy % TILE, gx % TILE] += ey - (origin_y + iy * res)
+            hit_count[slot, gy % TILE, gx % TILE] += 1.0
             mark[iy - y_lo, ix - x_lo] = _HIT
     # Every beam sampled at half a cell up to half a cell before its end, so no crossed cell is skipped on
     # axis-aligned beams and the end cell is left to the occupied update.
@@ -227,9 +446,16 @@ def _integrate(  # noqa: PLR0917 - numba kernels take positional arguments
                 mark[iy - y_lo, ix - x_lo] = _FREE
     # Each marked cell updated once, however many beams crossed it.
     for row in range(mark.shape[0]):
+        gy = y_lo + row + shift_y
         for col in range(mark.shape[1]):
             if mark[row, col] == 0:
                 continue
-            cell = logodds[y_lo + row, x_lo + col]
+            gx = x_lo + col + shift_x
+            slot = table[gy // TILE, gx // TILE]
+            if slot < 0:
+                slot = tiles[0]
+                tiles[0] += 1
+                table[gy // TILE, gx // TILE] = slot
+            cell = logodds[slot, gy % TILE, gx % TILE]
             cell = cell - lfree if mark[row, col] == _FREE else cell + loccupied
-            logodds[y_lo + row, x_lo + col] = min(max(cell, -lmax), lmax)
+            logodds[slot, gy % TILE, gx % TILE] = min(max(cell, -lmax), lmax)

@@ -28,7 +28,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mrs_nav.geometry import FloatArray, Pose2D, wrap_angle
-from mrs_nav.slam.grid import GRID_ARRAYS_TYPE, GridArrays, IntArray, LogOddsGrid
+from mrs_nav.slam.grid import GRID_ARRAYS_TYPE, TILE, GridArrays, IntArray, LogOddsGrid
 
 COARSE = 4  # cells per coarse translation step
 COARSE_ANGLE = math.radians(1.0)
@@ -76,7 +76,7 @@ class DistanceField:
         self.resolution = res
         self.max_distance = max_distance
         # The window only: the whole map's occupied() would cost O(map) per scan.
-        occ = grid.logodds[y0:y1, x0:x1] > 0.0 if x1 > x0 and y1 > y0 else np.zeros((0, 0), dtype=bool)
+        occ = grid.window(y0, y1, x0, x1) > 0.0 if x1 > x0 and y1 > y0 else np.zeros((0, 0), dtype=bool)
         self.empty = not bool(occ.any())
         self.origin_x = grid.origin_x + (x0 - pad) * res
         self.origin_y = grid.origin_y + (y0 - pad) * res
@@ -308,11 +308,13 @@ _SURFACE_ARGS = "Tuple((float64, float64, int32[:, ::1], int32[:, ::1], " + GRID
 @numba.njit("UniTuple(float64, 2)(" + GRID_ARRAYS_TYPE + ", int64, int64)", cache=True)  # type: ignore[misc]
 def _mean_hit(grid: GridArrays, iy: int, ix: int) -> tuple[float, float]:
     """LogOddsGrid.mean_hits of one cell."""
-    _, hit_sum, hit_count, origin_x, origin_y, res = grid
+    _, _, hit_table, hit_x, hit_y, hit_count, cells, origin_x, origin_y, res = grid
+    gy, gx = iy + cells[2], ix + cells[3]
+    slot = hit_table[gy // TILE, gx // TILE]
     # np.float64, not float(): numba's float() of a float32 stays float32, and so would the division.
-    count = np.float64(hit_count[iy, ix])
-    dx = np.float64(hit_sum[0, iy, ix]) / count if count > 0.0 else 0.5 * res
-    dy = np.float64(hit_sum[1, iy, ix]) / count if count > 0.0 else 0.5 * res
+    count = np.float64(hit_count[slot, gy % TILE, gx % TILE]) if slot >= 0 else 0.0
+    dx = np.float64(hit_x[slot, gy % TILE, gx % TILE]) / count if count > 0.0 else 0.5 * res
+    dy = np.float64(hit_y[slot, gy % TILE, gx % TILE]) / count if count > 0.0 else 0.5 * res
     return float(origin_x + ix * res + dx), float(origin_y + iy * res + dy)
 
 
@@ -320,8 +322,8 @@ def _mean_hit(grid: GridArrays, iy: int, ix: int) -> tuple[float, float]:
 def _normal_at(grid: GridArrays, iy: int, ix: int) -> float:
     """Surface normal angle (rad) at grid cell ``(iy, ix)`` from the principal axes of the mean hits of the
     occupied cells within ``NORMAL_RADIUS`` (clipped at the grid's edge); NaN where fewer than 3 are."""
-    logodds, _, hit_count, _, _, _ = grid
-    height, width = logodds.shape
+    table, logodds, hit_table, _, _, hit_count, cells, _, _, _ = grid
+    height, width, shift_y, shift_x = cells
     size = 2 * NORMAL_RADIUS + 1
     px = np.empty(size * size)
     py = np.empty(size * size)
@@ -330,7 +332,12 @@ def _normal_at(grid: GridArrays, iy: int, ix: int) -> float:
         gy = min(max(iy + oy, 0), height - 1)
         for ox in range(-NORMAL_RADIUS, NORMAL_RADIUS + 1):
             gx = min(max(ix + ox, 0), width - 1)
-            if logodds[gy, gx] > 0.0 and hit_count[gy, gx] > 0.0:
+            ty, tx = (gy + shift_y) // TILE, (gx + shift_x) // TILE
+            row, col = (gy + shift_y) % TILE, (gx + shift_x) % TILE
+            slot, hits = table[ty, tx], hit_table[ty, tx]
+            if slot < 0 or hits < 0:
+                continue
+            if logodds[slot, row, col] > 0.0 and hit_count[hits, row, col] > 0.0:
                 px[n], py[n] = _mean_hit(grid, gy, gx)
                 n += 1
     if n < 3:
@@ -355,7 +362,7 @@ def _surface(
 ) -> tuple[float, float, float]:
     """DistanceField.nearest_surface of one point: mean hit (m) of the nearest occupied cell, normal (rad)."""
     field_x, field_y, near_iy, near_ix, grid = surface
-    res = grid[5]
+    res = grid[9]
     height, width = near_iy.shape
     ix = min(max(math.floor((x - field_x) / res), 0), width - 1)
     iy = min(max(math.floor((y - field_y) / res), 0), height - 1)
@@ -400,7 +407,7 @@ def _refine(  # noqa: PLR0917 - numba kernels take positional arguments
     odometry prior ``prior``; the refined pose (yaw not wrapped)."""
     x, y, yaw = start
     prior_x, prior_y, prior_yaw = prior
-    res = surface[4][5]
+    res = surface[4][9]
     n_points = points.shape[0]
     cutoff = 4.0 * res  # pairs farther apart than this are not the same surface
     huber = 0.5 * res

@@ -32,6 +32,7 @@ RES = 0.05
 def random_grid(rng: np.random.Generator) -> LogOddsGrid:
     """A 6 m x 5 m grid with random walls: a few line segments of hits plus scattered single cells."""
     grid = LogOddsGrid(RES, (-3.0, -2.5, 3.0, 2.5), grows=False)
+    logodds, hit_x, hit_y, hit_count = grid.dense()
     for _ in range(6):
         a, b = rng.uniform([-2.8, -2.3], [2.8, 2.3], size=(2, 2))
         t = rng.uniform(0.0, 1.0, 200)[:, None]
@@ -39,12 +40,13 @@ def random_grid(rng: np.random.Generator) -> LogOddsGrid:
         ix, iy = grid.cell_of(hits[:, 0], hits[:, 1])
         inside = (ix >= 0) & (ix < grid.width) & (iy >= 0) & (iy < grid.height)
         ix, iy, hits = ix[inside], iy[inside], hits[inside]
-        np.add.at(grid.hit_sum[0], (iy, ix), hits[:, 0] - (grid.origin_x + ix * RES))
-        np.add.at(grid.hit_sum[1], (iy, ix), hits[:, 1] - (grid.origin_y + iy * RES))
-        np.add.at(grid.hit_count, (iy, ix), 1.0)
-        grid.logodds[iy, ix] = 2.0
-    scattered = rng.integers(0, grid.logodds.size, 60)
-    grid.logodds.ravel()[scattered] = rng.choice([-1.0, 1.0], 60)  # occupied without hits, or free
+        np.add.at(hit_x, (iy, ix), hits[:, 0] - (grid.origin_x + ix * RES))
+        np.add.at(hit_y, (iy, ix), hits[:, 1] - (grid.origin_y + iy * RES))
+        np.add.at(hit_count, (iy, ix), 1.0)
+        logodds[iy, ix] = 2.0
+    scattered = rng.integers(0, logodds.size, 60)
+    logodds.ravel()[scattered] = rng.choice([-1.0, 1.0], 60)  # occupied without hits, or free
+    grid.assign(logodds, hit_x, hit_y, hit_count)
     return grid
 
 
@@ -77,7 +79,8 @@ def reference_nearest_surface(field: DistanceField, x: np.ndarray, y: np.ndarray
     oy, ox = (a.ravel() for a in np.meshgrid(offsets, offsets, indexing="ij"))
     gy = np.clip(niy[:, None] + oy[None, :], 0, grid.height - 1)
     gx = np.clip(nix[:, None] + ox[None, :], 0, grid.width - 1)
-    occupied = (grid.logodds[gy, gx] > 0.0) & (grid.hit_count[gy, gx] > 0)
+    logodds, _, _, hit_count = grid.dense()
+    occupied = (logodds[gy, gx] > 0.0) & (hit_count[gy, gx] > 0)
     px, py = grid.mean_hits(gy, gx)
     w = occupied.astype(np.float64)
     count = w.sum(axis=1)
@@ -174,18 +177,20 @@ def reference_integrate(grid: LogOddsGrid, sensor: Pose2D, beams: BeamSplit) -> 
     occ_ix, occ_iy = grid.cell_of(ends_x[:n_hit], ends_y[:n_hit])
     keep = (occ_ix >= 0) & (occ_ix < grid.width) & (occ_iy >= 0) & (occ_iy < grid.height)
     occ_ix, occ_iy = occ_ix[keep], occ_iy[keep]
-    np.add.at(grid.hit_sum[0], (occ_iy, occ_ix), ends_x[:n_hit][keep] - (grid.origin_x + occ_ix * res))
-    np.add.at(grid.hit_sum[1], (occ_iy, occ_ix), ends_y[:n_hit][keep] - (grid.origin_y + occ_iy * res))
-    np.add.at(grid.hit_count, (occ_iy, occ_ix), 1.0)
+    logodds, hit_x, hit_y, hit_count = grid.dense()
+    np.add.at(hit_x, (occ_iy, occ_ix), ends_x[:n_hit][keep] - (grid.origin_x + occ_ix * res))
+    np.add.at(hit_y, (occ_iy, occ_ix), ends_y[:n_hit][keep] - (grid.origin_y + occ_iy * res))
+    np.add.at(hit_count, (occ_iy, occ_ix), 1.0)
     keep = (free_ix >= 0) & (free_ix < grid.width) & (free_iy >= 0) & (free_iy < grid.height)
-    free = np.zeros(grid.logodds.shape, dtype=bool)
+    free = np.zeros(logodds.shape, dtype=bool)
     free[free_iy[keep], free_ix[keep]] = True
-    occ = np.zeros(grid.logodds.shape, dtype=bool)
+    occ = np.zeros(logodds.shape, dtype=bool)
     occ[occ_iy, occ_ix] = True
     free &= ~occ
-    grid.logodds[free] -= grid.lfree
-    grid.logodds[occ] += grid.loccupied
-    np.clip(grid.logodds, -grid.lmax, grid.lmax, out=grid.logodds)
+    logodds[free] -= grid.lfree
+    logodds[occ] += grid.loccupied
+    np.clip(logodds, -grid.lmax, grid.lmax, out=logodds)
+    grid.assign(logodds, hit_x, hit_y, hit_count)
 
 
 # --- the comparisons ---------------------------------------------------------------------------------------------
@@ -213,7 +218,7 @@ def test_refine_equals_the_numpy_reference(seed):
     grid = random_grid(rng)
     field = DistanceField(grid, (-3.0, -2.5, 3.0, 2.5), 0.5, 8)
     # Points on the grid's walls seen from a pose, then matched from a start 5 cm / 2 degrees off.
-    occupied = np.argwhere(grid.occupied() & (grid.hit_count > 0))
+    occupied = np.argwhere(grid.occupied() & (grid.dense()[3] > 0))
     hx, hy = grid.mean_hits(occupied[:, 0], occupied[:, 1])
     truth = Pose2D(*rng.uniform(-0.5, 0.5, 2), rng.uniform(-math.pi, math.pi))
     c, s = math.cos(truth.yaw), math.sin(truth.yaw)
@@ -297,8 +302,8 @@ def test_integrate_equals_the_numpy_reference(seed):
     for sensor, beams in scans + scans:
         grid.integrate(sensor, beams)
         reference_integrate(reference, sensor, beams)
-    assert (reference.logodds == -1.5).sum() > 100  # clamped free cells
-    assert (reference.hit_count > 1).sum() > 100  # cells hit more than once
-    np.testing.assert_array_equal(grid.logodds, reference.logodds)
-    np.testing.assert_array_equal(grid.hit_count, reference.hit_count)
-    np.testing.assert_array_equal(grid.hit_sum, reference.hit_sum)
+    want = reference.dense()
+    assert (want[0] == -1.5).sum() > 100  # clamped free cells
+    assert (want[3] > 1).sum() > 100  # cells hit more than once
+    for got_array, want_array in zip(grid.dense(), want, strict=True):  # log-odds, hit sums in x and y, counts
+        np.testing.assert_array_equal(got_array, want_array)

@@ -58,14 +58,14 @@ def test_slam_corrects_noisy_odometry_on_a_loop():
 def test_corrupt_scans_fall_back_to_odometry(ranges):
     slam = Slam(SlamConfig(linearUpdate=0.0, angularUpdate=0.0))
     slam.add_scan(Pose2D(0.0, 0.0, 0.0), cast(Pose2D(0.0, 0.0, 0.0)), 0.0)
-    before = slam.grid.logodds.copy()
+    before = slam.grid.dense()[0]
     odom = Pose2D(0.3, 0.0, 0.1)
     bad = LaserScanData(-math.pi, 2 * math.pi / 360, 0.12, 3.5, ranges)
     done = slam.add_scan(odom, bad, 1.0)
     assert done is not None
     if ranges.size != 17:  # 17 beams at 1 m are a (wrong but) valid scan: it may be matched and mapped
         assert astuple(done.pose) == pytest.approx(astuple(odom))
-        assert np.array_equal(before, slam.grid.logodds)
+        assert np.array_equal(before, slam.grid.dense()[0])
 
 
 def test_update_gates():
@@ -146,10 +146,10 @@ def test_the_map_rebuilt_from_the_kept_beams_is_the_map_built_online():
         noisy = exact.ranges + rng.normal(0.0, 0.01, exact.ranges.size)
         scan = LaserScanData(exact.angle_min, exact.angle_increment, exact.range_min, exact.range_max, noisy)
         slam.add_scan(pose, scan, float(i))
-    online = slam.grid.logodds.copy()
+    online = slam.grid.dense()[0]
     slam.rebuild_map()
     # float32 rounding moves an end point across a cell border now and then (4 of 17,105 observed cells here).
-    assert np.count_nonzero(slam.grid.logodds != online) <= 1e-3 * np.count_nonzero(online)
+    assert np.count_nonzero(slam.grid.dense()[0] != online) <= 1e-3 * np.count_nonzero(online)
     scan_bytes = 360 * 8 * 2  # a 360-beam scan's angles and ranges in float64
     kept = max(r.beams.nbytes for r in slam.processed if r.beams is not None)
     assert kept <= scan_bytes / 2
@@ -159,7 +159,7 @@ def test_a_rebuild_past_the_cell_limit_maps_what_fits_instead_of_failing():
     slam = Slam(SlamConfig(linearUpdate=0.0, angularUpdate=0.0))
     for i, pose in enumerate(drive(10)):
         slam.add_scan(pose, cast(pose), float(i))
-    occupied = int(np.count_nonzero(slam.grid.logodds > 0.0))
+    occupied = int(np.count_nonzero(slam.grid.occupied()))
     # The map may not grow any more, and a correction moves the first node 30 m away, far off the map.
     slam.grid.max_cells = slam.grid.width * slam.grid.height
     first = slam.nodes[0]
@@ -167,4 +167,4 @@ def test_a_rebuild_past_the_cell_limit_maps_what_fits_instead_of_failing():
     slam.rebuild_map()
     assert slam.clipped_in_rebuild == 1
     # Every other scan is mapped again where it was: the map is not left cleared half-way.
-    assert int(np.count_nonzero(slam.grid.logodds > 0.0)) >= 0.8 * occupied
+    assert int(np.count_nonzero(slam.grid.occupied())) >= 0.8 * occupied
