@@ -33,6 +33,18 @@ def wrap_angles(angles: FloatArray) -> FloatArray:
     return np.asarray((angles + np.pi) % (2.0 * np.pi) - np.pi, dtype=np.float64)
 
 
+def cos_sin(angles: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """``cos`` and ``sin`` of ``angles``, the same to the last bit wherever the array lies in memory.
+
+    Why: numpy (1.24 on AVX-512 machines) takes the cosine and sine of a strided array, such as a column of
+    poses, by one of two routines that differ in the last bit, chosen by the array's address. A pose graph solved
+    to different poses from run to run, and a replay of the MIT Infinite Corridor log ended 7 m, 34 m or 106 m
+    off by chance. A contiguous copy always takes the same routine.
+    """
+    contiguous = np.ascontiguousarray(angles, dtype=np.float64)
+    return np.cos(contiguous), np.sin(contiguous)
+
+
 def yaw_from_quaternion(x: float, y: float, z: float, w: float) -> float:
     """Yaw (rotation about z) of a unit quaternion, in radians."""
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))

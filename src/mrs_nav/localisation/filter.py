@@ -25,7 +25,7 @@ from scipy.special import logsumexp
 from scipy.stats import norm
 
 from mrs_nav.errors import InvalidInputError
-from mrs_nav.geometry import FloatArray, Pose2D, format_point, wrap_angle, wrap_angles
+from mrs_nav.geometry import FloatArray, Pose2D, cos_sin, format_point, wrap_angle, wrap_angles
 from mrs_nav.localisation.config import LocalisationConfig
 from mrs_nav.localisation.likelihood_field import LikelihoodField
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
@@ -242,7 +242,8 @@ class ParticleFilter:
         share = float(w[near].sum())
         wn = w[near] / share if share > 0.0 else np.full(int(near.sum()), 1.0 / near.sum())
         pn = p[near]
-        mean_yaw = math.atan2(float(wn @ np.sin(pn[:, 2])), float(wn @ np.cos(pn[:, 2])))
+        cos, sin = cos_sin(pn[:, 2])
+        mean_yaw = math.atan2(float(wn @ sin), float(wn @ cos))
         mean = np.array([wn @ pn[:, 0], wn @ pn[:, 1], mean_yaw])
         d = pn - mean
         d[:, 2] = wrap_angles(d[:, 2])
@@ -301,7 +302,7 @@ class ParticleFilter:
             return  # nothing seen: the motion update alone
         model = self._field(scan.range_max)
         p = self.particles
-        c, s = np.cos(p[:, 2])[:, None], np.sin(p[:, 2])[:, None]
+        c, s = (v[:, None] for v in cos_sin(p[:, 2]))
         xs = p[:, 0, None] + c * ex - s * ey
         ys = p[:, 1, None] + s * ex + c * ey
         log_p = model.log_likelihood(xs, ys, self._sigma()).sum(axis=1)

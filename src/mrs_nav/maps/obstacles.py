@@ -26,7 +26,7 @@ import numpy as np
 import numpy.typing as npt
 
 from mrs_nav.errors import InvalidInputError
-from mrs_nav.geometry import FloatArray
+from mrs_nav.geometry import FloatArray, cos_sin
 from mrs_nav.limits import MAX_COORDINATE_M, MAX_SHAPES, MAX_SIZE_M
 from mrs_nav.maps.world import World
 from mrs_nav.textfiles import read_text
@@ -187,7 +187,7 @@ class Obstacles:
         b = self.boxes
         signs = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
         local = signs[None, :, :] * b[:, None, 3:5]
-        c, s = np.cos(b[:, 2])[:, None], np.sin(b[:, 2])[:, None]
+        c, s = (v[:, None] for v in cos_sin(b[:, 2]))
         x = b[:, None, 0] + c * local[..., 0] - s * local[..., 1]
         y = b[:, None, 1] + s * local[..., 0] + c * local[..., 1]
         return np.stack([x, y], axis=-1)
@@ -207,7 +207,7 @@ class Obstacles:
         dist_c = norm - c[None, :, 2]
         normal_c = np.divide(rel, norm[..., None], out=np.zeros_like(rel), where=norm[..., None] > 0.0)
         b = self.boxes
-        cos, sin = np.cos(b[:, 2]), np.sin(b[:, 2])
+        cos, sin = cos_sin(b[:, 2])
         dx, dy = p[:, None, 0] - b[None, :, 0], p[:, None, 1] - b[None, :, 1]
         q = np.stack([cos * dx + sin * dy, -sin * dx + cos * dy], axis=-1)
         half = b[None, :, 3:5]
@@ -256,7 +256,7 @@ class Obstacles:
 
     def _segments_hit_boxes(self, a: FloatArray, step: FloatArray, clearance: float) -> BoolArray:
         bx = self.boxes
-        cos, sin = np.cos(bx[:, 2]), np.sin(bx[:, 2])
+        cos, sin = cos_sin(bx[:, 2])
         dx, dy = a[:, None, 0] - bx[None, :, 0], a[:, None, 1] - bx[None, :, 1]
         q0 = np.stack([cos * dx + sin * dy, -sin * dx + cos * dy], axis=-1)
         d = np.stack(

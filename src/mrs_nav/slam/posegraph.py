@@ -23,7 +23,7 @@ import numpy.typing as npt
 from scipy.sparse import coo_matrix, csr_matrix, diags
 from scipy.sparse.linalg import splu
 
-from mrs_nav.geometry import FloatArray, Pose2D, wrap_angles
+from mrs_nav.geometry import FloatArray, Pose2D, cos_sin, wrap_angles
 
 
 @dataclass(frozen=True)
@@ -61,9 +61,9 @@ class _Problem:
         """``x_i^-1 x_j`` per edge as (rx, ry, ryaw), and cos, sin of ``yaw_i`` and of the measured yaw."""
         poses = np.vstack([self.first, flat.reshape(-1, 3)])
         xi, xj = poses[self.i], poses[self.j]
-        c, s = np.cos(xi[:, 2]), np.sin(xi[:, 2])
+        c, s = cos_sin(xi[:, 2])
         dx, dy = xj[:, 0] - xi[:, 0], xj[:, 1] - xi[:, 1]
-        return c * dx + s * dy, -s * dx + c * dy, xj[:, 2] - xi[:, 2], np.cos(self.z[:, 2]), np.sin(self.z[:, 2])
+        return c * dx + s * dy, -s * dx + c * dy, xj[:, 2] - xi[:, 2], *cos_sin(self.z[:, 2])
 
     def residuals(self, flat: FloatArray) -> FloatArray:
         """``z^-1 (x_i^-1 x_j)`` of every edge, scaled by its weights, flattened."""
@@ -76,7 +76,7 @@ class _Problem:
         """d residuals / d (poses 1..n), sparse: each edge's 3 rows depend on the 3 + 3 values of its nodes."""
         rx, ry, _, cz, sz = self._relative(flat)
         poses = np.vstack([self.first, flat.reshape(-1, 3)])
-        ci, si = np.cos(poses[self.i, 2]), np.sin(poses[self.i, 2])
+        ci, si = cos_sin(poses[self.i, 2])
         n = len(self.i)
         # d(rx, ry, ryaw) / d(x_i, y_i, yaw_i, x_j, y_j, yaw_j), E x 3 x 6.
         jr = np.zeros((n, 3, 6))
