@@ -161,6 +161,11 @@ class Slam:
         # With loop closure, consecutive nodes are linked by the local track's motion (mrs_nav.slam.local_track)
         self._local = LocalTrack(c, self.matcher) if c.loop_closure else None
         self._node_local: list[tuple[Pose2D, float]] = []  # each node's local-track pose and travel
+        # The nodes' (x, y, yaw) for _nearest_node and the node list they are of: extended as nodes are appended,
+        # taken anew when a loop closure replaces the list (made from the whole list for every scan, they cost
+        # 1 ms a scan on the Freiburg 079 log, 6 % of its CPU).
+        self._node_poses: FloatArray = np.empty((0, 3))
+        self._node_poses_of = self.nodes
 
     @property
     def processed(self) -> list[ProcessedScan]:
@@ -259,7 +264,12 @@ class Slam:
         """The nearest node within the keyframe radius and heading of ``pose``, or None when the place is new."""
         if not self.nodes:
             return None
-        xy = np.array([(n.pose.x, n.pose.y, n.pose.yaw) for n in self.nodes], dtype=np.float64)
+        if self._node_poses_of is not self.nodes:
+            self._node_poses, self._node_poses_of = np.empty((0, 3)), self.nodes
+        if len(self._node_poses) < len(self.nodes):
+            added = [(n.pose.x, n.pose.y, n.pose.yaw) for n in self.nodes[len(self._node_poses) :]]
+            self._node_poses = np.concatenate([self._node_poses, np.array(added, dtype=np.float64)])
+        xy = self._node_poses
         distance = np.hypot(xy[:, 0] - pose.x, xy[:, 1] - pose.y)
         turned = np.abs(np.remainder(xy[:, 2] - pose.yaw + math.pi, math.tau) - math.pi)
         distance[(distance >= KEYFRAME_RADIUS_M) | (turned >= KEYFRAME_HEADING_RAD)] = np.inf

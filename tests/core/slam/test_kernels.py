@@ -58,8 +58,13 @@ def field_of(grid: LogOddsGrid, rng: np.random.Generator) -> DistanceField:
     return DistanceField(grid, (x0, y0, x0 + rng.uniform(2.0, 4.0), y0 + rng.uniform(2.0, 3.5)), 0.5, PAD)
 
 
+def distances(field: DistanceField) -> np.ndarray:
+    """The field's truncated distances (m) over its window."""
+    return field.distance_table[field.squared]
+
+
 def cells(field: DistanceField, x: np.ndarray, y: np.ndarray):
-    h, w = field.distance.shape
+    h, w = field.squared.shape
     ix = np.clip(np.floor((x - field.origin_x) / field.resolution).astype(np.int64), 0, w - 1)
     iy = np.clip(np.floor((y - field.origin_y) / field.resolution).astype(np.int64), 0, h - 1)
     return ix, iy
@@ -143,7 +148,7 @@ def reference_field_arrays(grid: LogOddsGrid, field: DistanceField, pad: int):
     none (-1, the truncation) where the nearest is not nearer than the field's cap."""
     y0 = round((field.origin_y - grid.origin_y) / RES) + pad
     x0 = round((field.origin_x - grid.origin_x) / RES) + pad
-    h, w = field.distance.shape[0] - 2 * pad, field.distance.shape[1] - 2 * pad
+    h, w = field.squared.shape[0] - 2 * pad, field.squared.shape[1] - 2 * pad
     occupied = np.argwhere(grid.occupied()[y0 : y0 + h, x0 : x0 + w])  # row order
     rows, cols = (a.ravel() for a in np.indices((h, w)))
     squared = (rows[:, None] - occupied[None, :, 0]) ** 2 + (cols[:, None] - occupied[None, :, 1]) ** 2
@@ -200,7 +205,7 @@ def reference_integrate(grid: LogOddsGrid, sensor: Pose2D, beams: BeamSplit) -> 
 def test_nearest_surface_equals_the_numpy_reference(seed):
     rng = np.random.default_rng(seed)
     field = field_of(random_grid(rng), rng)
-    h, w = field.distance.shape
+    h, w = field.squared.shape
     # Over the window and a little beyond it (clipped into the padding, where no surface is)
     x = rng.uniform(field.origin_x - 0.2, field.origin_x + w * RES + 0.2, 2000)
     y = rng.uniform(field.origin_y - 0.2, field.origin_y + h * RES + 0.2, 2000)
@@ -240,7 +245,8 @@ def test_refine_equals_the_numpy_reference(seed):
 def test_search_scores_equal_the_numpy_reference(seed):
     rng = np.random.default_rng(seed)
     field = field_of(random_grid(rng), rng)
-    table = np.exp(-(field.distance**2) / (2.0 * 0.05**2))
+    values = np.exp(-(field.distance_table**2) / (2.0 * 0.05**2))
+    table = values[field.squared]
     points = rng.uniform(-4.0, 4.0, (170, 2))  # some far enough to leave the table and be clipped
     prior = Pose2D(*rng.uniform(-1.0, 1.0, 2), rng.uniform(-math.pi, math.pi))
     angles = np.arange(-7, 8) * math.radians(1.0)
@@ -248,7 +254,9 @@ def test_search_scores_equal_the_numpy_reference(seed):
     base = (int(rng.integers(-8, 9)), int(rng.integers(-8, 9)))
     spread = (rng.uniform(0.02, 0.3), rng.uniform(0.01, 0.2))
     matcher = ScanMatcher(0.05, 0.3, 0.5)
-    got = matcher._scores(field, table, points, prior, angles=angles, offsets=offsets, base=base, spread=spread)
+    got = matcher._scores(
+        field, (field.squared, values), points, prior, angles=angles, offsets=offsets, base=base, spread=spread
+    )
     ox = (base[0] + offsets) * RES / spread[0]
     oy = (base[1] + offsets) * RES / spread[0]
     z2 = (angles[:, None, None] / spread[1]) ** 2 + ox[None, :, None] ** 2 + oy[None, None, :] ** 2
@@ -264,10 +272,11 @@ def test_distance_field_equals_the_numpy_reference(seed):
     grid = random_grid(rng)
     field = field_of(grid, rng)
     distance, near_iy, near_ix = reference_field_arrays(grid, field, PAD)
-    between = (field.distance > 0.0) & (field.distance < field.max_distance)
-    assert field.distance.min() == 0.0  # the window holds walls
+    got = distances(field)
+    between = (got > 0.0) & (got < field.max_distance)
+    assert got.min() == 0.0  # the window holds walls
     assert between.mean() > 0.1  # and open space near them
-    np.testing.assert_allclose(field.distance, distance, rtol=0.0, atol=1e-12)
+    np.testing.assert_allclose(got, distance, rtol=0.0, atol=1e-12)
     np.testing.assert_array_equal(field.near_iy, near_iy)
     np.testing.assert_array_equal(field.near_ix, near_ix)
 
@@ -277,12 +286,14 @@ def test_likelihood_tables_equal_the_numpy_reference(seed):
     rng = np.random.default_rng(seed)
     field = field_of(random_grid(rng), rng)
     sigma, sigma_coarse = 0.05, 0.1
-    likelihood, pooled = _likelihoods(field.squared, field.distance_table, sigma, sigma_coarse, COARSE // 2)
-    np.testing.assert_allclose(likelihood, np.exp(-(field.distance**2) / (2.0 * sigma**2)), rtol=1e-14, atol=0.0)
-    wide = np.exp(-(field.distance**2) / (2.0 * sigma_coarse**2))
+    fine, coarse, pooled = _likelihoods(field.squared, field.distance_table, sigma, sigma_coarse, COARSE // 2)
+    distance = distances(field)
+    likelihood = np.exp(-(distance**2) / (2.0 * sigma**2))
+    np.testing.assert_allclose(fine[field.squared], likelihood, rtol=1e-14, atol=0.0)
+    wide = np.exp(-(distance**2) / (2.0 * sigma_coarse**2))
     reference = ndimage.maximum_filter(wide, size=COARSE + 1, mode="nearest")
     assert (reference > wide).mean() > 0.1  # the pooling changes many cells
-    np.testing.assert_allclose(pooled, reference, rtol=1e-14, atol=0.0)
+    np.testing.assert_allclose(coarse[pooled], reference, rtol=1e-14, atol=0.0)
 
 
 @pytest.mark.parametrize("seed", range(5))
