@@ -43,40 +43,43 @@ AGREES = 1.0  # standard deviations: a loop edge the poses satisfy this well is 
 
 @dataclass(frozen=True)
 class _Problem:
-    """The edges as arrays: end nodes, measurements ``z`` (E x 3) and weights ``w`` (1 / sigma, E x 3)."""
+    """The edges as arrays: end nodes, measurements ``z`` (E x 3), weights ``w`` (1 / sigma, E x 3) and the
+    cosine and sine of the measured yaws."""
 
     first: FloatArray
     i: npt.NDArray[np.int64]
     j: npt.NDArray[np.int64]
     z: FloatArray
     w: FloatArray
+    cz: FloatArray
+    sz: FloatArray
 
     @classmethod
     def of(cls, first: FloatArray, edges: Sequence[Edge]) -> _Problem:
         z = np.array([[e.measured.x, e.measured.y, e.measured.yaw] for e in edges], dtype=np.float64)
         w = np.array([[1.0 / e.sigma_xy, 1.0 / e.sigma_xy, 1.0 / e.sigma_yaw] for e in edges], dtype=np.float64)
-        return cls(first, np.array([e.i for e in edges]), np.array([e.j for e in edges]), z, w)
+        return cls(first, np.array([e.i for e in edges]), np.array([e.j for e in edges]), z, w, *cos_sin(z[:, 2]))
 
     def _relative(self, flat: FloatArray) -> tuple[FloatArray, ...]:
-        """``x_i^-1 x_j`` per edge as (rx, ry, ryaw), and cos, sin of ``yaw_i`` and of the measured yaw."""
+        """``x_i^-1 x_j`` per edge as (rx, ry, ryaw), and cos, sin of ``yaw_i``."""
         poses = np.vstack([self.first, flat.reshape(-1, 3)])
         xi, xj = poses[self.i], poses[self.j]
         c, s = cos_sin(xi[:, 2])
         dx, dy = xj[:, 0] - xi[:, 0], xj[:, 1] - xi[:, 1]
-        return c * dx + s * dy, -s * dx + c * dy, xj[:, 2] - xi[:, 2], *cos_sin(self.z[:, 2])
+        return c * dx + s * dy, -s * dx + c * dy, xj[:, 2] - xi[:, 2], c, s
 
     def residuals(self, flat: FloatArray) -> FloatArray:
         """``z^-1 (x_i^-1 x_j)`` of every edge, scaled by its weights, flattened."""
-        rx, ry, ryaw, cz, sz = self._relative(flat)
+        rx, ry, ryaw, _, _ = self._relative(flat)
+        cz, sz = self.cz, self.sz
         ex, ey = rx - self.z[:, 0], ry - self.z[:, 1]
         res = np.stack([cz * ex + sz * ey, -sz * ex + cz * ey, wrap_angles(ryaw - self.z[:, 2])], axis=1)
         return np.asarray((res * self.w).ravel(), dtype=np.float64)
 
     def jacobian(self, flat: FloatArray) -> csr_matrix:
         """d residuals / d (poses 1..n), sparse: each edge's 3 rows depend on the 3 + 3 values of its nodes."""
-        rx, ry, _, cz, sz = self._relative(flat)
-        poses = np.vstack([self.first, flat.reshape(-1, 3)])
-        ci, si = cos_sin(poses[self.i, 2])
+        rx, ry, _, ci, si = self._relative(flat)
+        cz, sz = self.cz, self.sz
         n = len(self.i)
         # d(rx, ry, ryaw) / d(x_i, y_i, yaw_i, x_j, y_j, yaw_j), E x 3 x 6.
         jr = np.zeros((n, 3, 6))
