@@ -168,3 +168,17 @@ def test_a_rebuild_past_the_cell_limit_maps_what_fits_instead_of_failing():
     assert slam.clipped_in_rebuild == 1
     # Every other scan is mapped again where it was: the map is not left cleared half-way.
     assert int(np.count_nonzero(slam.grid.occupied())) >= 0.8 * occupied
+
+
+def test_a_scan_metres_on_is_found_beyond_the_usual_window_where_odometry_spreads_that_far():
+    # Scans 3 m apart, as on a log recorded sparsely: the odometry is 0.7 m short and 12 degrees off, more than
+    # the 0.3 m window; the prediction's spread after 3 m (0.3 m) makes the weak first match be searched again.
+    slam = Slam(SlamConfig(linearUpdate=0.0, angularUpdate=0.0))
+    start = Pose2D(-3.5, 0.5, 0.0)
+    slam.add_scan(start, cast(start, max_range=8.0), 0.0)
+    true = Pose2D(-0.5, 0.3, 0.1)
+    odom_guess = Pose2D(-1.2, 0.3, 0.1 + math.radians(12.0))
+    done = slam.add_scan(odom_guess, cast(true, max_range=8.0), 1.0)
+    assert done is not None
+    assert math.hypot(done.pose.x - true.x, done.pose.y - true.y) < 0.01
+    assert abs(done.pose.yaw - true.yaw) < math.radians(0.5)
