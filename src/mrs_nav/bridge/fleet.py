@@ -88,6 +88,8 @@ class FleetMonitor:
         raise InvalidInputError(f"robot {name!r} is not in the fleet (found: {', '.join(self.robots)})")
 
     def close(self) -> None:
+        for monitor in self.robots.values():
+            monitor.close()  # its subscribers; the session is ours
         session, self._session = self._session, None
         if session is not None:
             session.close()  # type: ignore[no-untyped-call]

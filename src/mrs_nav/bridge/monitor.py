@@ -113,7 +113,13 @@ class RemoteMonitor:
         return self
 
     def close(self) -> None:
+        """Stop watching: undeclare the subscribers, then close the session if it is the monitor's own (on a
+        shared session nothing else would stop the callbacks; zenoh-python 1.6 also left an advanced subscriber's
+        callback running after its session closed, its issue 624)."""
         session, self._session = self._session, None
+        entities, self._entities = self._entities, []
+        for entity in entities:
+            entity.undeclare()
         if session is not None and self._owns_session:
             session.close()  # type: ignore[no-untyped-call]
 

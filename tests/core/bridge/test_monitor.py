@@ -18,7 +18,7 @@ from mrs_nav.bridge.dashboard import render, summarise
 from mrs_nav.bridge.decoder import noetic_store
 from mrs_nav.bridge.keys import topic_key, types_key
 from mrs_nav.bridge.monitor import RemoteMonitor, TopicStats
-from mrs_nav.bridge.session import open_session
+from mrs_nav.bridge.session import open_client_session, open_session
 from mrs_nav.bridge.snapshot import RobotView, draw_snapshot
 from mrs_nav.bridge.wire import encode_attachment, encode_definition, encoding_text
 from tests.rosharness import free_port, wait_for
@@ -165,3 +165,31 @@ def test_a_topic_is_stale_without_its_publisher_or_after_three_silent_periods() 
     assert summary["topics"]["/map"]["stale"] is True
     assert summary["topics"]["/map"]["age_s"] == pytest.approx(34.0)
     assert "STALE" in render(summary)
+
+
+def test_a_monitor_closed_on_a_shared_session_stops_receiving(bridge: tuple[FakeBridge, str]) -> None:
+    fake, endpoint = bridge
+    odom_pub = fake.publisher("/odom", "nav_msgs/msg/Odometry", latched=False)
+
+    def received(monitor: RemoteMonitor) -> bool:
+        fake.put(odom_pub, odometry(0.0, 0.1), "nav_msgs/msg/Odometry")  # again until its subscriber is in place
+        return odom_count(monitor) > 0
+
+    session = open_client_session([endpoint], "peer")
+    try:
+        closed = RemoteMonitor([endpoint]).attach(session)
+        wait_for(lambda: received(closed), 10, "odom")
+        closed.close()
+        before = odom_count(closed)
+        # A second monitor on the same session gets the next messages; a subscriber left behind would too.
+        second = RemoteMonitor([endpoint]).attach(session)
+        wait_for(lambda: received(second), 10, "odom on the second monitor")
+        second.close()
+        assert odom_count(closed) == before
+    finally:
+        session.close()  # type: ignore[no-untyped-call]
+
+
+def odom_count(monitor: RemoteMonitor) -> int:
+    stats = monitor.topics().get("/odom")
+    return 0 if stats is None else stats.count
