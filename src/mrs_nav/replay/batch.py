@@ -29,8 +29,9 @@ from mrs_nav.bag.salvage import readable_bag
 from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.replay.golden import load_golden, regressions
 from mrs_nav.replay.session_replay import PlanOptions, SessionReplay, replay_session, write_session_outputs
-from mrs_nav.replay.slam_replay import write_outputs
+from mrs_nav.replay.slam_replay import SlamReplay, truth_scans, write_outputs
 from mrs_nav.slam.config import MAX_COORDINATE_M, SlamConfig
+from mrs_nav.slam.consistency import doubled_wall_fraction_at
 from mrs_nav.tables import markdown_table
 
 GOLDEN_SUFFIX = ".golden.json"
@@ -45,6 +46,9 @@ class BagJob:
     params: tuple[str, ...] = ()
     plan: PlanOptions | None = None
     golden: Path | None = None
+    # Also the doubled-wall figure of the map the scans make at the bag's ground-truth poses (summary key
+    # doubled_wall_fraction_at_truth; None without truth): what the scene itself puts on the broken-map line.
+    reference: bool = False
 
     @property
     def name(self) -> str:
@@ -113,6 +117,7 @@ def replay_bag(job: BagJob, progress: Callable[[int], None] | None = None) -> tu
     with tempfile.TemporaryDirectory(prefix="mrs_nav_replay_") as work:
         bag, note = readable_bag(job.bag, Path(work))
         session = replay_session(bag, config, job.plan, progress)
+        at_truth = _doubled_at_truth(bag, session.slam, config) if job.reference else None
     result = session.slam
     if not result.estimate:
         skipped = _skipped(session)
@@ -130,10 +135,22 @@ def replay_bag(job: BagJob, progress: Callable[[int], None] | None = None) -> tu
         metrics=dict(session.metrics),
         regressions=tuple(r.describe() for r in found),
         has_golden=golden is not None,
-        summary=result.summary(),
+        summary=result.summary() | ({"doubled_wall_fraction_at_truth": at_truth} if job.reference else {}),
         notes=tuple(n for n in (note, *_skipped(session)) if n),
     )
     return outcome, session
+
+
+def _doubled_at_truth(bag: Path, result: SlamReplay, config: SlamConfig) -> float | None:
+    """:func:`doubled_wall_fraction_at` the bag's ground-truth poses; None without truth or when those poses
+    take the map past its cell limit."""
+    scans = truth_scans(bag, result)
+    if scans is None:
+        return None
+    try:
+        return doubled_wall_fraction_at(config, scans)
+    except InvalidInputError:
+        return None
 
 
 def _skipped(session: SessionReplay) -> list[str]:

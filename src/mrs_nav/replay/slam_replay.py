@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -34,6 +34,7 @@ from mrs_nav.slam.config import MAX_COORDINATE_M, SlamConfig
 from mrs_nav.slam.consistency import BROKEN_FRACTION, doubled_wall_fraction, free_endpoint_fraction
 from mrs_nav.slam.metrics import TrajectoryErrors, align_se2, trajectory_errors
 from mrs_nav.slam.relations import Relation, relation_errors
+from mrs_nav.slam.scan import BeamSplit, split_beams
 from mrs_nav.slam.slam import Slam
 
 SCAN_TOPIC = "/scan"
@@ -193,6 +194,27 @@ def replay_slam(bag: Path, config: SlamConfig, progress: Callable[[int], None] |
     # Ground truth that arrived after its scan (e.g. recorded at a lower rate) is matched now.
     result.truth = [truth.at(t) for t in result.stamps]
     return result
+
+
+def truth_scans(bag: Path, result: SlamReplay) -> Callable[[], Iterator[tuple[Pose2D, BeamSplit]]] | None:
+    """The scans ``result`` processed, read from ``bag`` again, each at its ground-truth laser pose and with its
+    beams split as the SLAM split them (for :func:`mrs_nav.slam.consistency.doubled_wall_fraction_at`); None
+    without truth for most of them (:attr:`SlamReplay.has_truth`)."""
+    if not result.has_truth:
+        return None
+    truth = {stamp: pose for stamp, pose in zip(result.stamps, result.truth, strict=True) if pose is not None}
+    slam = result.slam
+
+    def scans() -> Iterator[tuple[Pose2D, BeamSplit]]:
+        left = dict(truth)  # a later scan with a processed one's stamp was skipped as out of order
+        for _, _, msg in read_messages(bag, [SCAN_TOPIC]):
+            pose = left.pop(stamp_of(msg), None)
+            if pose is not None:
+                scan = scan_from_message(msg)
+                usable = slam.config.usable_range(scan.range_max)
+                yield pose.compose(slam.laser_pose), split_beams(scan, usable, slam.config.maxRange)
+
+    return scans
 
 
 def _check_pairing(bag: Path, result: SlamReplay) -> None:

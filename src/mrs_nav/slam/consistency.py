@@ -29,7 +29,7 @@ splits it by how far apart the scans were taken, which is where a global deforma
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -37,9 +37,11 @@ from scipy.spatial import cKDTree
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D
+from mrs_nav.slam.config import SlamConfig
 from mrs_nav.slam.grid import LogOddsGrid
 from mrs_nav.slam.matcher import thin_points
-from mrs_nav.slam.slam import Slam
+from mrs_nav.slam.scan import BeamSplit
+from mrs_nav.slam.slam import Slam, new_map
 
 # Of the end points on doubled walls (doubled_wall_fraction): 3.5x the most any map that holds reached on 13 public
 # logs (0.0014), below the least broken one (Orebro, 0.011).
@@ -76,13 +78,35 @@ def doubled_wall_fraction(slam: Slam) -> float:
     more than :data:`WALL_TOLERANCE_M` from any occupied cell, in pieces at least :data:`WALL_PIECE_M` long: runs
     of consecutive end points of one scan, each within :data:`WALL_GAP_M` of the one before, measured from the
     first to the last. Moving people leave shorter pieces, doubled or turned walls do not."""
-    reach = max(1, math.floor(WALL_TOLERANCE_M / slam.grid.resolution + 1e-9))
+    return _doubled_fraction(slam.grid, _placed_hits(slam))
+
+
+def doubled_wall_fraction_at(config: SlamConfig, scans: Callable[[], Iterator[tuple[Pose2D, BeamSplit]]]) -> float:
+    """:func:`doubled_wall_fraction` of the map the scans make at given laser poses (map frame) instead of a
+    SLAM's: ``scans()`` yields each scan's laser pose and beams, the same on every call (it is called twice: the
+    map is built, then its end points are looked up). The map is made as the SLAM makes one (``config``).
+
+    Why: with a log's corrected poses (another SLAM's map of the same scans) it says how much of the figure the
+    scene itself draws. Things that stood on one pass and were gone on the next (parked cars, on the Freiburg
+    campus) leave long pieces on free cells in any map of the log; a SLAM map with more than the corrected
+    poses' map is worse than that SLAM's.
+    Raises InvalidInputError when the poses take the map past its cell limit.
+    """
+    grid = new_map(config)
+    for sensor, beams in scans():
+        grid.integrate(sensor, beams)
+    return _doubled_fraction(grid, (_end_points(sensor, beams) for sensor, beams in scans()))
+
+
+def _doubled_fraction(grid: LogOddsGrid, hits: Iterable[FloatArray]) -> float:
+    """:func:`doubled_wall_fraction` of end points ``hits`` (per scan, N x 2, in beam order) on ``grid``."""
+    reach = max(1, math.floor(WALL_TOLERANCE_M / grid.resolution + 1e-9))
     offsets = np.arange(-reach, reach + 1)
     near = np.hypot(offsets[:, None], offsets[None, :]) <= reach
     on_walls = total = 0
-    for xy in _placed_hits(slam):
+    for xy in hits:
         total += int(xy.shape[0])
-        flagged = _stray(slam.grid, xy, near)
+        flagged = _stray(grid, xy, near)
         if not flagged.any():
             continue
         joined = flagged[1:] & flagged[:-1] & (np.hypot(*np.diff(xy, axis=0).T) <= WALL_GAP_M)
@@ -110,12 +134,15 @@ def _placed_hits(slam: Slam) -> Iterator[FloatArray]:
     for record in slam.processed:
         if record.beams is None or record.beams.hit_ranges.size == 0:
             continue
-        sensor = record.pose.compose(record.laser_pose)
-        beams = record.beams.split()
-        angles = beams.hit_angles + sensor.yaw
-        yield np.stack(
-            [sensor.x + beams.hit_ranges * np.cos(angles), sensor.y + beams.hit_ranges * np.sin(angles)], axis=1
-        )
+        yield _end_points(record.pose.compose(record.laser_pose), record.beams.split())
+
+
+def _end_points(sensor: Pose2D, beams: BeamSplit) -> FloatArray:
+    """The end points (N x 2, m) of ``beams`` taken from the laser pose ``sensor``, in beam order."""
+    angles = beams.hit_angles + sensor.yaw
+    return np.stack(
+        [sensor.x + beams.hit_ranges * np.cos(angles), sensor.y + beams.hit_ranges * np.sin(angles)], axis=1
+    )
 
 
 def revisit_spread(sensor_poses: Sequence[Pose2D], points: Sequence[FloatArray], min_gap: int = REVISIT_GAP) -> float:

@@ -132,15 +132,7 @@ class Slam:
         self.config = config or SlamConfig()
         self.laser_pose = laser_pose or Pose2D(0.0, 0.0, 0.0)
         c = self.config
-        self.grid = LogOddsGrid(
-            c.delta,
-            (c.xmin, c.ymin, c.xmax, c.ymax),
-            grows=c.map_grows,
-            lfree=c.lfree,
-            loccupied=c.loccupied,
-            lmax=c.lmax,
-            max_cells=MAX_MAP_CELLS,
-        )
+        self.grid = new_map(c)
         self.matcher = ScanMatcher(c.sigma, c.search_linear, c.search_angular)
         self.loop_matcher = ScanMatcher(c.sigma, LOOP_SEARCH_M, LOOP_SEARCH_RAD)  # wide search, no odometry prior
         self.nodes: list[ProcessedScan] = []  # the pose graph's nodes (keyframes), with their beams
@@ -441,6 +433,20 @@ class Slam:
             MIN_SPREAD_M + c.srr * travelled + c.srt * turned,
             MIN_SPREAD_RAD + c.str * travelled + c.stt * turned,
         )
+
+
+def new_map(config: SlamConfig) -> LogOddsGrid:
+    """An empty map as the SLAM starts one: ``config``'s resolution, initial extent, growth and log-odds."""
+    c = config
+    return LogOddsGrid(
+        c.delta,
+        (c.xmin, c.ymin, c.xmax, c.ymax),
+        grows=c.map_grows,
+        lfree=c.lfree,
+        loccupied=c.loccupied,
+        lmax=c.lmax,
+        max_cells=MAX_MAP_CELLS,
+    )
 
 
 def ambiguous_loop_match(

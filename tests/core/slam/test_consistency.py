@@ -15,11 +15,12 @@ from mrs_nav.slam.consistency import (
     BROKEN_FRACTION,
     REVISIT_GAP,
     doubled_wall_fraction,
+    doubled_wall_fraction_at,
     free_endpoint_fraction,
     revisit_spread,
     revisit_spread_by_distance,
 )
-from mrs_nav.slam.scan import LaserScanData
+from mrs_nav.slam.scan import LaserScanData, split_beams
 from tests.core.bag.carmen_fixture import drive
 from tests.core.slam.synthetic import ROOM, cast, person
 
@@ -106,3 +107,25 @@ def test_doubled_walls_are_a_broken_map_and_an_empty_room_is_not():
     wide = [dataclasses.replace(s, angle_increment=1.2 * s.angle_increment) for s in map(cast, drive())]
     assert doubled_wall_fraction(_mapped(wide)) > 2 * BROKEN_FRACTION
     assert doubled_wall_fraction(_mapped([cast(pose) for pose in drive()])) == 0.0
+
+
+def test_a_car_gone_on_the_way_back_draws_on_the_line_in_a_map_at_the_true_poses_too():
+    # A 2 m car in the middle of the room while the robot drives the first leg, gone when it drives back (an 8 m
+    # laser: the way back sees the far wall through where it stood): its side is on free cells of any map of these
+    # scans, the true poses' as much as a SLAM's. The figure at reference poses says so; the room without the car,
+    # or with a car that stays, reads nothing.
+    car = np.array([[-1.0, 0.0, 1.0, 0.0]])
+    poses = drive()
+    config = SlamConfig()
+
+    def at_truth(with_car: int) -> float:
+        def scans():
+            for k, pose in enumerate(poses):
+                scan = cast(pose, max_range=8.0, walls=np.vstack([ROOM, car]) if k < with_car else ROOM)
+                yield pose, split_beams(scan, config.usable_range(scan.range_max), config.maxRange)
+
+        return doubled_wall_fraction_at(config, scans)
+
+    assert at_truth(with_car=21) > BROKEN_FRACTION  # the first leg's scans
+    assert at_truth(with_car=0) == 0.0
+    assert at_truth(with_car=len(poses)) == 0.0
