@@ -142,7 +142,7 @@ def run(args: argparse.Namespace) -> str:
         f"'broken' = more than {BROKEN_FRACTION} of the scan end points on doubled walls: pieces of a metre or more "
         "on free cells away from the map's walls (moving people leave shorter ones); the same figure for the map "
         "the scans make at the log's corrected poses says how much of it the scene draws (things that stood on "
-        "one pass and were gone on the next: parked cars); '-' where a bag has no ground truth.\n\n"
+        "one pass and were gone on the next, such as a parked car); '-' where a bag has no ground truth.\n\n"
         + markdown_table(header, rows)
         + "\n"
     )

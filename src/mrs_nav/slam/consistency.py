@@ -87,9 +87,9 @@ def doubled_wall_fraction_at(config: SlamConfig, scans: Callable[[], Iterator[tu
     map is built, then its end points are looked up). The map is made as the SLAM makes one (``config``).
 
     Why: with a log's corrected poses (another SLAM's map of the same scans) it says how much of the figure the
-    scene itself draws. Things that stood on one pass and were gone on the next (parked cars, on the Freiburg
-    campus) leave long pieces on free cells in any map of the log; a SLAM map with more than the corrected
-    poses' map is worse than that SLAM's.
+    scene itself draws. Things that stood on one pass and were gone on the next (a parked car; on the Freiburg
+    campus, whatever stood in its open squares) leave long pieces on free cells in any map of the log; a SLAM
+    map with more than the corrected poses' map is worse than that SLAM's.
     Raises InvalidInputError when the poses take the map past its cell limit.
     """
     grid = new_map(config)
