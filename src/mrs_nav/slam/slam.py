@@ -94,7 +94,7 @@ LOOP_AFTER_CLOSURE_M = 3.0  # m of travel after a closure before the next attemp
 REBUILD_AFTER_CELLS = 1.0
 # m beyond a scan's reach up to which the map's out-of-date tiles are drawn when the scan reaches one of them: a
 # region drawn at a time, not a strip per scan (each drawing passes over the rebuild's scans once; module doc)
-REDRAW_MARGIN_M = 10.0
+REDRAW_MARGIN_M = 4.0
 # A node per place and heading, at the update gates' scale (linearUpdate, angularUpdate 0.2): while exploring,
 # every processed scan (0.2 m or 0.2 rad apart) is still a node; the heading tolerance is wider because the
 # laser sees all round, so the same place crossed in another direction rarely needs another node.

@@ -8,14 +8,16 @@ import itertools
 import math
 
 import numpy as np
+import pytest
 
 from mrs_nav.geometry import Pose2D
 from mrs_nav.slam import Slam, SlamConfig
+from mrs_nav.slam import slam as slam_module
 from mrs_nav.slam.consistency import BROKEN_FRACTION, doubled_wall_fraction, free_endpoint_fraction
 from mrs_nav.slam.grid import LogOddsGrid
 from mrs_nav.slam.matcher import DistanceField, ScanMatcher, thin_points, window_field
 from mrs_nav.slam.scan import BeamSplit, split_beams
-from mrs_nav.slam.slam import LOOP_SEARCH_M, LOOP_SEARCH_RAD, ambiguous_loop_match
+from mrs_nav.slam.slam import LOOP_SEARCH_M, LOOP_SEARCH_RAD, REDRAW_MARGIN_M, ambiguous_loop_match
 from tests.core.slam.synthetic import ROOM, cast
 
 
@@ -139,11 +141,14 @@ def test_a_loop_match_that_fits_clearly_better_than_the_graph_is_not_ambiguous()
     assert not ambiguous_loop_match(matcher, field, points, match, Pose2D(-0.88, 0.42, 0.22))
 
 
-def test_a_map_rebuilt_lazily_is_the_map_rebuilt_at_once():
+@pytest.mark.parametrize("margin", [0.0, REDRAW_MARGIN_M])
+def test_a_map_rebuilt_lazily_is_the_map_rebuilt_at_once(monkeypatch, margin):
     # After a closure the map's tiles are drawn again only where the SLAM reads them (mrs_nav.slam.slam module
     # doc). Reading the whole map after every scan draws every out-of-date tile at once, as the rebuild of the
     # whole map at each closure did: the poses and the map must come out the same to the bit. The drive's own
     # closures agree with the graph (no rebuild), so every 40 scans a correction bends the graph's first half.
+    # With no margin each drawing holds only what the next scan reads or maps.
+    monkeypatch.setattr(slam_module, "REDRAW_MARGIN_M", margin)
     truth = drive()
     odom = drifting_odometry(truth, 0, 1.03)
     runs = []
