@@ -28,8 +28,8 @@ re-cast some 1670 scans over the whole campus, 130 s of its 190 s of CPU for 29 
 the tiles round the robot, and the next closure often comes before the robot reaches the rest. A tile redrawn
 from the same scans, in the same order, holds what a rebuild of the whole grid would put there, to the bit: its
 cells see the same beams' samples (each beam is cast only where it crosses the region, the same samples) and the
-same updates in the same order, and the grid grows as that rebuild would (the caller grows it in
-:meth:`invalidate`'s order).
+same updates in the same order, and the grid grows as that rebuild would (the caller grows it first, scan by scan
+in the rebuild's order). Out-of-date tiles are neither read nor written: the caller draws them first.
 
 The grid covers the bounding box of what scans have reached (plus a growth margin), never more than
 ``max_cells`` cells: growth past that raises :class:`InvalidInputError` before anything is allocated.
@@ -40,7 +40,9 @@ Cells are indexed ``[row, col] = [iy, ix]``; cell ``(ix, iy)`` covers
 
 from __future__ import annotations
 
+import itertools
 import math
+from collections.abc import Iterable
 
 import numba
 import numpy as np
@@ -72,6 +74,7 @@ GRID_ARRAYS_TYPE = (
 
 # Rectangles of out-of-date tiles drawn in one pass at most (stale_regions): every beam is clipped to each
 REDRAW_RECTANGLES = 8
+REDRAW_CHUNK = 64  # scans whose rays redraw() casts at a time
 GROWTH_MARGIN_MAX_M = 20.0  # m, the widest margin a growing grid adds (ensure_contains)
 # map_server's default occupied_thresh 0.65 as log-odds; a cell more likely free than occupied is free.
 OCCUPIED_LOGODDS = math.log(0.65 / 0.35)
@@ -240,8 +243,11 @@ class LogOddsGrid:
         return x0, y0, x1, y1
 
     def invalidate(self) -> None:
-        """Mark every tile of the grid out of date (module docstring): the map is to be drawn again by
-        :meth:`redraw` from scans at new poses. The caller grows the grid first to hold all those scans."""
+        """Forget everything observed (:meth:`clear`) and mark every tile out of date (module docstring): the map
+        is to be drawn again by :meth:`redraw` from scans at new poses. The caller grows the grid first to hold
+        all those scans. Cleared, not kept until drawn: an out-of-date tile is never read, and tiles the new
+        poses no longer reach would stay allocated (on the MIT Infinite Corridor log, 0.04 GB more at the end)."""
+        self.clear()
         self.stale[:] = True
         self.stale_tiles = self.stale.size
 
@@ -281,45 +287,48 @@ class LogOddsGrid:
             ]
         return done
 
-    def redraw(self, rects: list[tuple[int, int, int, int]], scans: list[tuple[Pose2D, BeamSplit]]) -> None:
+    def redraw(self, rects: list[tuple[int, int, int, int]], scans: Iterable[tuple[Pose2D, BeamSplit]]) -> None:
         """Draw the out-of-date tiles in the tile rectangles ``rects`` (:meth:`stale_regions`) again from
         ``scans`` (laser pose in the map frame, beams), in their order, as :meth:`integrate` would have drawn
         them into a cleared grid; those tiles are then up to date. ``scans`` must hold every scan of the redraw
-        that can reach the tiles (others are cast only where they cross ``rects``: cheap)."""
+        that can reach the tiles (others are cast only where they cross ``rects``: cheap), and nothing may have
+        been integrated into the tiles since :meth:`invalidate` (the caller draws the tiles a scan reaches first).
+        The scans are taken :data:`REDRAW_CHUNK` at a time, so that their rays need little memory at once.
+        """
         target = np.zeros_like(self.stale)
         for ty0, ty1, tx0, tx1 in rects:
             target[ty0:ty1, tx0:tx1] = self.stale[ty0:ty1, tx0:tx1]
-        for table, pools in ((self.table, (self.logodds,)), (self.hit_table, (self.hit_x, self.hit_y, self.hit_count))):
-            slots = table[target]
-            for pool in pools:
-                pool[slots[slots >= 0]] = 0.0
-        self._reserve(
-            int(np.count_nonzero(target & (self.table < 0))), int(np.count_nonzero(target & (self.hit_table < 0)))
-        )
-        if scans:
+        self._reserve(int(np.count_nonzero(target & (self.table < 0))), 0)
+        spare_hits = int(np.count_nonzero(target & (self.hit_table < 0)))
+        clip = np.array(rects, dtype=np.int64).reshape(-1, 4)
+        update = np.array([self.lfree, self.loccupied, self.lmax], dtype=np.float32)
+        # Per log-odds pool slot: the number (from 1) of the last scan that marked a cell of the tile, and which
+        # cells it marked, a bit each (12 bytes a tile; pages mapped only where written)
+        marked_by = np.zeros(len(self.logodds), dtype=np.int32)
+        marks = np.zeros(len(self.logodds), dtype=np.uint64)
+        done, remaining = 0, iter(scans)
+        while chunk := list(itertools.islice(remaining, REDRAW_CHUNK)):
+            hits = sum(b.hit_ranges.size for _, b in chunk)
+            self._reserve(0, min(spare_hits, hits))
             # numpy's cosine, as integrate takes it (numba's differs in the last bits)
-            rays = [_rays(sensor, b) for sensor, b in scans]
-            starts = np.concatenate([[0], np.cumsum([r[2].size for r in rays])]).astype(np.int64)
-            n_hit = np.array([b.hit_ranges.size for _, b in scans], dtype=np.int64)
-            sensors = np.array([(sensor.x, sensor.y) for sensor, _ in scans], dtype=np.float64)
-            update = np.array([self.lfree, self.loccupied, self.lmax], dtype=np.float32)
-            # Which cells this scan marked, by scan number (mod 255) per log-odds pool slot: pages are mapped
-            # only where written, a byte per cell of the tiles redrawn.
-            marks = np.zeros((len(self.logodds), TILE, TILE), dtype=np.uint8)
+            rays = [_rays(sensor, b) for sensor, b in chunk]
             _redraw(
                 self.kernel_args(),
                 self.tiles,
                 target,
-                np.array(rects, dtype=np.int64).reshape(-1, 4),
+                clip,
+                marked_by,
                 marks,
-                sensors,
+                done,
+                np.array([(sensor.x, sensor.y) for sensor, _ in chunk], dtype=np.float64),
                 np.concatenate([r[0] for r in rays]),
                 np.concatenate([r[1] for r in rays]),
                 np.concatenate([r[2] for r in rays]),
-                starts,
-                n_hit,
+                np.concatenate([[0], np.cumsum([r[2].size for r in rays])]).astype(np.int64),
+                np.array([b.hit_ranges.size for _, b in chunk], dtype=np.int64),
                 update,
             )
+            done += len(chunk)
         self.stale_tiles -= int(np.count_nonzero(target))
         self.stale[target] = False
 
@@ -605,7 +614,7 @@ def _integrate(  # noqa: PLR0917 - numba kernels take positional arguments
 @numba.njit(  # type: ignore[misc]
     "void("
     + GRID_ARRAYS_TYPE
-    + ", int64[::1], boolean[:, ::1], int64[:, ::1], uint8[:, :, ::1], float64[:, ::1], float64[::1],"
+    + ", int64[::1], boolean[:, ::1], int64[:, ::1], int32[::1], uint64[::1], int64, float64[:, ::1], float64[::1],"
     " float64[::1], float64[::1], int64[::1], int64[::1], float32[::1])",
     cache=True,
 )
@@ -614,7 +623,9 @@ def _redraw(  # noqa: PLR0917 - numba kernels take positional arguments
     tiles: IntArray,
     target: npt.NDArray[np.bool_],
     rects: IntArray,
-    marks: npt.NDArray[np.uint8],
+    marked_by: npt.NDArray[np.int32],
+    marks: npt.NDArray[np.uint64],
+    first: int,
     sensors: FloatArray,
     cos: FloatArray,
     sin: FloatArray,
@@ -629,9 +640,11 @@ def _redraw(  # noqa: PLR0917 - numba kernels take positional arguments
     beam is sampled only over the parts of it that can cross ``rects``: the same samples as _integrate takes
     there, so those tiles get the same values.
 
-    Instead of _integrate's marks over the scan's whole window, ``marks`` holds, per cell of the log-odds pool,
-    the number (1-255, cycling) of the last scan that updated the cell: a cell is updated when a scan first
-    marks it, end points first, so once per scan, occupied where the scan holds an end point, else free."""
+    Instead of _integrate's marks over the scan's whole window, per log-odds pool slot ``marked_by`` holds the
+    number of the last scan that updated a cell of the tile (``first`` + 1 for the first scan here; earlier
+    calls of one redraw numbered those before) and ``marks`` which cells it updated, a bit each: a cell is
+    updated when a scan first marks it, end points first, so once per scan, occupied where the scan holds an end
+    point, else free."""
     table, logodds, hit_table, hit_x, hit_y, hit_count, cells, origin_x, origin_y, res = grid
     height, width, shift_y, shift_x = cells
     lfree, loccupied, lmax = update[0], update[1], update[2]
@@ -644,9 +657,7 @@ def _redraw(  # noqa: PLR0917 - numba kernels take positional arguments
         clip[r, 2] = origin_y + (rects[r, 0] * TILE - shift_y - 1) * res
         clip[r, 3] = origin_y + (rects[r, 1] * TILE - shift_y + 1) * res
     for s in range(starts.size - 1):
-        number = np.uint8(s % 255 + 1)
-        if number == 1 and s > 0:  # numbers come round again: forget which scan marked what
-            marks[: tiles[0]] = 0
+        number = first + s + 1
         sx, sy = sensors[s, 0], sensors[s, 1]
         for b in range(starts[s], starts[s] + n_hits[s]):  # end points, as _integrate marks them
             ex = sx + ranges[b] * cos[b]
@@ -671,8 +682,11 @@ def _redraw(  # noqa: PLR0917 - numba kernels take positional arguments
                 slot = tiles[0]
                 tiles[0] += 1
                 table[gy // TILE, gx // TILE] = slot
-            if marks[slot, gy % TILE, gx % TILE] != number:
-                marks[slot, gy % TILE, gx % TILE] = number
+            if marked_by[slot] != number:
+                marked_by[slot], marks[slot] = number, 0
+            bit = np.uint64(1) << np.uint64(gy % TILE * TILE + gx % TILE)
+            if marks[slot] & bit == 0:
+                marks[slot] |= bit
                 cell = logodds[slot, gy % TILE, gx % TILE] + loccupied
                 logodds[slot, gy % TILE, gx % TILE] = min(max(cell, -lmax), lmax)
         for b in range(starts[s], starts[s + 1]):
@@ -712,7 +726,10 @@ def _redraw(  # noqa: PLR0917 - numba kernels take positional arguments
                         slot = tiles[0]
                         tiles[0] += 1
                         table[gy // TILE, gx // TILE] = slot
-                    if marks[slot, gy % TILE, gx % TILE] != number:
-                        marks[slot, gy % TILE, gx % TILE] = number
+                    if marked_by[slot] != number:
+                        marked_by[slot], marks[slot] = number, 0
+                    bit = np.uint64(1) << np.uint64(gy % TILE * TILE + gx % TILE)
+                    if marks[slot] & bit == 0:
+                        marks[slot] |= bit
                         cell = logodds[slot, gy % TILE, gx % TILE] - lfree
                         logodds[slot, gy % TILE, gx % TILE] = min(max(cell, -lmax), lmax)

@@ -497,7 +497,7 @@ class Slam:
         for rect in rects:
             x0, y0, x1, y1 = grid.tiles_box(rect)
             near |= (x + r >= x0) & (x - r <= x1) & (y + r >= y0) & (y - r <= y1)
-        grid.redraw(rects, [(self._redraw_scans[k][0], self._redraw_scans[k][1].split()) for k in np.flatnonzero(near)])
+        grid.redraw(rects, ((self._redraw_scans[k][0], self._redraw_scans[k][1].split()) for k in np.flatnonzero(near)))
         if grid.stale_tiles == 0:  # all drawn: the scans stay only with their nodes
             self._redraw_scans, self._redraw_reach = [], np.empty((0, 3))
 
