@@ -55,12 +55,11 @@ from mrs_nav.slam.config import MAX_COORDINATE_M, MAX_MAP_CELLS, SlamConfig
 from mrs_nav.slam.grid import LogOddsGrid
 from mrs_nav.slam.local_track import LocalTrack
 from mrs_nav.slam.matcher import (
-    FIELD_MAX_DISTANCE,
-    RECOVERY_SEARCH_M,
     DistanceField,
     MatchResult,
     ScanMatcher,
     match_in_grid,
+    match_reach,
     thin_points,
     window_field,
 )
@@ -256,10 +255,7 @@ class Slam:
         reach = max(float(beams.hit_ranges.max(initial=0.0)), float(beams.free_ranges.max(initial=0.0)))
         if self.last is not None and points.shape[0] >= MIN_POINTS:
             sensor_prior = predicted.compose(mount)
-            # What the matcher reads: the scan's points round the prior, plus its widest search and the
-            # distance field's reach
-            search = max(c.search_linear, RECOVERY_SEARCH_M) + 2.0 * FIELD_MAX_DISTANCE + 4.0 * c.delta
-            self._redraw_around(sensor_prior, reach + search)
+            self._redraw_around(sensor_prior, reach + match_reach(self.matcher, c.delta))  # what the match reads
             match = match_in_grid(self.matcher, self._grid, thinned, sensor_prior, spread)
             pose = match.pose.compose(mount.inverse())
         else:
