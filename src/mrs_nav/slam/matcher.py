@@ -181,6 +181,14 @@ def window_field(grid: LogOddsGrid, points: FloatArray, sensor_prior: Pose2D, se
     return DistanceField(grid, bounds, FIELD_MAX_DISTANCE, pad)
 
 
+def match_reach(matcher: ScanMatcher, resolution: float) -> float:
+    """How far (m) beyond the scan's points at the prior :func:`match_in_grid` may read the grid: its widest
+    translation window (the matcher's, the wider search's, the recovery search's), the distance field's reach,
+    and the cells round the nearest walls whose hits give their normals (and one for rounding)."""
+    window = max(matcher.search_linear, WINDOW_MAX[0], RECOVERY_SEARCH_M)
+    return window + FIELD_MAX_DISTANCE + (NORMAL_RADIUS + 2) * resolution
+
+
 def match_in_grid(
     matcher: ScanMatcher, grid: LogOddsGrid, points: FloatArray, prior: Pose2D, spread: tuple[float, float]
 ) -> MatchResult:

@@ -318,3 +318,80 @@ def test_integrate_equals_the_numpy_reference(seed):
     assert (want[3] > 1).sum() > 100  # cells hit more than once
     for got_array, want_array in zip(grid.dense(), want, strict=True):  # log-odds, hit sums in x and y, counts
         np.testing.assert_array_equal(got_array, want_array)
+
+
+def _tiles_of(grid: LogOddsGrid, rects: list[tuple[int, int, int, int]]) -> np.ndarray:
+    covered = np.zeros(grid.stale.shape, dtype=np.int64)
+    for ty0, ty1, tx0, tx1 in rects:
+        covered[ty0:ty1, tx0:tx1] += 1
+    return covered
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_grid_redrawn_piece_by_piece_equals_the_scans_integrated_into_a_cleared_grid(seed):
+    """What a lazy rebuild relies on (mrs_nav.slam.grid module doc): after invalidate(), tiles drawn again in
+    regions at different times, from the same scans, hold what integrating the scans into a cleared grid gives,
+    to the bit (log-odds with clamping, hit sums and counts); a tile not yet drawn is unknown (invalidate clears
+    the grid: such a tile is never read). More than 64 scans of 60 beams: the marks of a tile are reused."""
+    rng = np.random.default_rng(seed)
+    extent = (-4.0, -3.0, 4.0, 3.0)
+
+    def scans(n):
+        out = []
+        for _ in range(n):
+            ranges = rng.uniform(0.05, 6.0, 60)
+            ranges[rng.random(60) < 0.05] = np.nan
+            scan = LaserScanData(-math.pi, 2.0 * math.pi / 60, 0.1, 8.0, ranges)
+            out.append((Pose2D(*rng.uniform(-3.0, 3.0, 2), rng.uniform(-math.pi, math.pi)), split_beams(scan, 4.0)))
+        return out
+
+    grid = LogOddsGrid(RES, extent, grows=False, lmax=1.5)
+    for sensor, beams in scans(20):  # what the map held before: to be replaced
+        grid.integrate(sensor, beams)
+    redraw = scans(300)
+    reference = LogOddsGrid(RES, extent, grows=False, lmax=1.5)
+    for sensor, beams in redraw:
+        reference.integrate(sensor, beams)
+    want = reference.dense()
+    grid.invalidate()
+    for _ in range(3):
+        x, y = rng.uniform(-4.0, 4.0), rng.uniform(-3.0, 3.0)
+        grid.redraw(grid.stale_regions((x - 1.0, y - 1.0, x + 1.5, y + 0.5)), redraw)
+    assert 0 < grid.stale_tiles < grid.stale.size
+    stale = np.kron(grid.stale, np.ones((8, 8), dtype=bool))[grid.shift_y :, grid.shift_x :][
+        : grid.height, : grid.width
+    ]
+    for got, wanted in zip(grid.dense(), want, strict=True):
+        np.testing.assert_array_equal(got[~stale], wanted[~stale])
+        assert not got[stale].any()
+    grid.redraw(grid.stale_regions(), redraw)
+    assert grid.stale_tiles == 0
+    assert (want[0] == -1.5).sum() > 100  # clamped free cells
+    for got_array, want_array in zip(grid.dense(), want, strict=True):
+        np.testing.assert_array_equal(got_array, want_array)
+
+
+def test_stale_regions_cover_exactly_the_out_of_date_tiles_of_a_box():
+    grid = LogOddsGrid(RES, (-10.0, -10.0, 10.0, 10.0))
+    assert grid.stale_regions() == []
+    grid.invalidate()
+    # A region drawn before (a box), and the map's reach round the robot moved on: a box less a box
+    grid.stale[10:20, 15:30] = False
+    grid.stale_tiles = int(grid.stale.sum())
+    box = (-6.0, -6.0, 2.0, 0.0)  # tiles 10-30 in x, 10-25 in y (0.4 m tiles from -10 m)
+    rects = grid.stale_regions(box)
+    covered = _tiles_of(grid, rects)
+    assert covered.max() == 1  # disjoint
+    inside = np.zeros_like(grid.stale)
+    inside[10:26, 10:31] = True
+    np.testing.assert_array_equal(covered == 1, grid.stale & inside)
+    assert len(rects) == 3  # beside the drawn box (two), and below it
+    assert grid.stale_regions((-9.9, -9.9, -9.5, -9.5)) == [(0, 2, 0, 2)]
+    assert grid.stale_regions((20.0, 20.0, 30.0, 30.0)) == []
+    # Scattered tiles: at most REDRAW_RECTANGLES, merged into the rectangle holding them all
+    grid.stale[:] = False
+    grid.stale[::3, ::3] = True
+    grid.stale_tiles = int(grid.stale.sum())
+    rects = grid.stale_regions()
+    assert len(rects) == 1
+    assert _tiles_of(grid, rects)[grid.stale].min() == 1

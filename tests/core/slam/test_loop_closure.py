@@ -3,18 +3,21 @@ closures are found, every accepted loop edge is right, corridor look-alikes are 
 consistent (the free-endpoint figure). A loop match on a place that looks like where the graph already puts the
 scan is ambiguous; one that fits clearly better than the graph's estimate is not."""
 
+import dataclasses
 import itertools
 import math
 
 import numpy as np
+import pytest
 
 from mrs_nav.geometry import Pose2D
 from mrs_nav.slam import Slam, SlamConfig
+from mrs_nav.slam import slam as slam_module
 from mrs_nav.slam.consistency import BROKEN_FRACTION, doubled_wall_fraction, free_endpoint_fraction
 from mrs_nav.slam.grid import LogOddsGrid
 from mrs_nav.slam.matcher import DistanceField, ScanMatcher, thin_points, window_field
 from mrs_nav.slam.scan import BeamSplit, split_beams
-from mrs_nav.slam.slam import LOOP_SEARCH_M, LOOP_SEARCH_RAD, ambiguous_loop_match
+from mrs_nav.slam.slam import LOOP_SEARCH_M, LOOP_SEARCH_RAD, REDRAW_MARGIN_M, ambiguous_loop_match
 from tests.core.slam.synthetic import ROOM, cast
 
 
@@ -50,8 +53,7 @@ def drive(laps=1.3):
                     return poses
 
 
-def run(loop_closure, seed=0, scale=1.03):
-    truth = drive()
+def drifting_odometry(truth, seed, scale):
     rng = np.random.default_rng(seed)
     odom = [truth[0]]
     for a, b in itertools.pairwise(truth):
@@ -59,6 +61,12 @@ def run(loop_closure, seed=0, scale=1.03):
         odom.append(
             odom[-1].compose(Pose2D(s.x * scale * (1 + 0.01 * rng.normal()), s.y, s.yaw * 1.01 + 0.003 * rng.normal()))
         )
+    return odom
+
+
+def run(loop_closure, seed=0, scale=1.03):
+    truth = drive()
+    odom = drifting_odometry(truth, seed, scale)
     slam = Slam(SlamConfig(linearUpdate=0.0, angularUpdate=0.0, loop_closure=loop_closure))
     for i, (gt, od) in enumerate(zip(truth, odom, strict=True)):
         slam.add_scan(od, cast(gt, walls=RING), float(i))
@@ -131,3 +139,38 @@ def test_a_loop_match_that_fits_clearly_better_than_the_graph_is_not_ambiguous()
     assert not ambiguous_loop_match(matcher, field, points, match, Pose2D(-0.4, 0.6, 0.25))
     # The graph 0.15 m off: refining from there slides onto the match, the same place.
     assert not ambiguous_loop_match(matcher, field, points, match, Pose2D(-0.88, 0.42, 0.22))
+
+
+@pytest.mark.parametrize("margin", [0.0, REDRAW_MARGIN_M])
+def test_a_map_rebuilt_lazily_is_the_map_rebuilt_at_once(monkeypatch, margin):
+    # After a closure the map's tiles are drawn again only where the SLAM reads them (mrs_nav.slam.slam module
+    # doc). Reading the whole map after every scan draws every out-of-date tile at once, as the rebuild of the
+    # whole map at each closure did: the poses and the map must come out the same to the bit. The drive's own
+    # closures agree with the graph (no rebuild), so every 40 scans a correction bends the graph's first half.
+    # With no margin each drawing holds only what the next scan reads or maps.
+    monkeypatch.setattr(slam_module, "REDRAW_MARGIN_M", margin)
+    truth = drive()
+    odom = drifting_odometry(truth, 0, 1.03)
+    runs = []
+    for eager in (True, False):
+        slam = Slam(SlamConfig(linearUpdate=0.0, angularUpdate=0.0))
+        out_of_date = 0
+        for i, (gt, od) in enumerate(zip(truth, odom, strict=True)):
+            slam.add_scan(od, cast(gt, walls=RING), float(i))
+            if i % 40 == 39:
+                half = len(slam.nodes) // 2
+                bent = [
+                    dataclasses.replace(n, pose=n.pose.compose(Pose2D(0.0, 0.03, 0.004))) for n in slam.nodes[:half]
+                ]
+                slam.nodes = bent + slam.nodes[half:]
+                slam.rebuild_map()
+            if eager:
+                slam.grid  # noqa: B018 - reading the map draws all of it
+            out_of_date = max(out_of_date, slam._grid.stale_tiles)  # what the map left to draw
+        slam.finish()
+        runs.append((slam, out_of_date))
+    (eager_slam, eager_left), (lazy_slam, lazy_left) = runs
+    assert eager_left == 0 < lazy_left  # the lazy map left tiles to draw while the robot was elsewhere
+    assert [p.pose for p in lazy_slam.processed] == [p.pose for p in eager_slam.processed]
+    for lazy, eager in zip(lazy_slam.grid.dense(), eager_slam.grid.dense(), strict=True):
+        np.testing.assert_array_equal(lazy, eager)
