@@ -137,8 +137,9 @@ def run(args: argparse.Namespace) -> str:
     return (
         f"### {len(jobs)} SLAM runs: {len(logs)} log(s) x {len(combos)} parameter combination(s)\n\n"
         f"Every run with {' '.join(params) or 'the shipped defaults'}; {len(jobs)} jobs on {how}, "
-        f"{wall:.1f} s wall in all, each job in a process of its own (peak RSS: that process's; on a Dask "
-        "cluster, the worker's). ATE compares with the log's corrected poses (another SLAM's output); "
+        f"{wall:.1f} s wall in all, each job in a process of its own (peak RSS: that process's during the replay, "
+        "before the reference figure below; on a Dask cluster, the worker's). ATE compares with the log's "
+        "corrected poses (another SLAM's output); "
         f"'broken' = more than {BROKEN_FRACTION} of the scan end points on doubled walls: pieces of a metre or more "
         "on free cells away from the map's walls (moving people leave shorter ones); the same figure for the map "
         "the scans make at the log's corrected poses says how much of it the scene draws (things that stood on "
