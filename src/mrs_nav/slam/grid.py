@@ -226,12 +226,6 @@ class LogOddsGrid:
         cos, sin, ranges = _rays(sensor, beams)
         return _box(sensor, cos, sin, ranges) if ranges.size else None
 
-    @property
-    def extent(self) -> tuple[float, float, float, float]:
-        """The box (m) the grid's cells cover."""
-        res = self.resolution
-        return self.origin_x, self.origin_y, self.origin_x + self.width * res, self.origin_y + self.height * res
-
     def tiles_box(self, rect: tuple[int, int, int, int]) -> tuple[float, float, float, float]:
         """The box (m) of tile rows ``[ty0, ty1)`` and columns ``[tx0, tx1)`` (``rect``), a cell wider each side."""
         ty0, ty1, tx0, tx1 = rect

@@ -179,6 +179,10 @@ def test_a_monitor_closed_on_a_shared_session_stops_receiving(bridge: tuple[Fake
     try:
         closed = RemoteMonitor([endpoint]).attach(session)
         wait_for(lambda: received(closed), 10, "odom")
+        # A last message, and every one put before it has been delivered (one publisher keeps its order): nothing
+        # is left in flight when the monitor closes.
+        fake.put(odom_pub, odometry(9.0, 0.1), "nav_msgs/msg/Odometry")
+        wait_for(lambda: closed.latest("/odom").pose.pose.position.x == 9.0, 10, "the last odom")
         closed.close()
         before = odom_count(closed)
         # A second monitor on the same session gets the next messages; a subscriber left behind would too.
