@@ -44,7 +44,7 @@ from mrs_nav.slam.scan import BeamSplit
 from mrs_nav.slam.slam import Slam, new_map
 
 # Of the end points on doubled walls (doubled_wall_fraction): 3.5x the most any map that holds reached on 13 public
-# logs (0.0014), below the least broken one (Orebro, 0.011).
+# logs (0.0014), below the least broken one (Orebro's, 0.011, before the matcher's wider search for weak matches).
 BROKEN_FRACTION = 0.005
 # m: end points this close to a wall of the map are on that wall (3 cells at 5 cm). A scan matched half a degree
 # off puts a wall 15 m away 0.13 m off, as in the Edmonton hall; FHW has a wall doubled 0.1-0.2 m apart over 15 m,
