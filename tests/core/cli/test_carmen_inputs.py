@@ -192,6 +192,32 @@ def test_people_walking_with_the_robot_are_no_broken_map(tmp_path, capsys):
     assert "WARNING" not in err
 
 
+def test_the_reference_figure_says_when_the_scene_itself_draws_doubled_walls(tmp_path, capsys):
+    # A car stands in the room while the robot drives the first leg and is gone when it drives back (an 8 m
+    # laser sees through where it stood): its side is on free cells of the map, at the true poses as much as at
+    # the SLAM's, and --reference says so.
+    car = np.array([[-1.0, 0.0, 1.0, 0.0]])
+    bag = tmp_path / "car.bag"
+    with BagWriter(bag) as writer:
+        for i, pose in enumerate(drive()):
+            t = 5.0 + 0.5 * i
+            scan = cast(pose, max_range=8.0, walls=np.vstack([ROOM, car]) if i < 21 else ROOM)
+            writer.write("/scan", LASER_SCAN, round(t * 1e9), laser_scan_message(scan, t, "base_scan"))
+            writer.write("/odom", ODOMETRY, round(t * 1e9), odometry_message(pose, t, "odom", "base_footprint"))
+            truth = odometry_message(pose, t, "map", "base_footprint")
+            writer.write("/ground_truth/odom", ODOMETRY, round(t * 1e9), truth)
+    code = main(["replay", str(bag), "--slam", "--out", str(tmp_path / "out"), "--json", "--reference", *EVERY_SCAN])
+    captured = capsys.readouterr()
+    assert code == 0
+    summary = json.loads(captured.out)
+    assert summary["map_broken"] is True
+    assert summary["doubled_wall_fraction_at_truth"] > BROKEN_FRACTION
+    assert "the map the scans make at the bag's ground-truth poses reads" in captured.err
+    code, summary, err = replay(bag, tmp_path / "plain", capsys)  # not asked for: not computed
+    assert "doubled_wall_fraction_at_truth" not in summary
+    assert "ground-truth poses" not in err
+
+
 @pytest.mark.parametrize("odom_constant", [False, True])
 def test_replay_refuses_scans_that_cannot_be_paired(odom_constant, tmp_path, capsys):
     bag = tmp_path / "c.bag"
