@@ -173,6 +173,11 @@ def _skipped(session: SessionReplay) -> list[str]:
             f"{result.slam.clipped_in_rebuild} scans reached past the map's cell limit when the map was rebuilt "
             "after loop closures and were mapped clipped to it"
         )
+    if result.poses_invalid:
+        notes.append(
+            f"skipped {result.poses_invalid} odometry or ground-truth messages with non-finite values (first: "
+            f"{result.first_invalid_pose})"
+        )
     if result.odom_rejected:
         notes.append(
             f"skipped {result.odom_rejected} of {result.odom_read} odometry messages farther than "

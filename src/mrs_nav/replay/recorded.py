@@ -81,7 +81,10 @@ def read_recorded(bag: Path, map_frame: str = "map", odom_frame: str = "odom") -
             points = [[p.pose.position.x, p.pose.position.y] for p in msg.poses]
             session.paths.append((stamp_of(msg), path_length(np.asarray(points).reshape(-1, 2)) if points else 0.0))
         elif topic == topics.ODOM:
-            session.odom.add(stamp_of(msg), pose_from_odometry(msg))
+            try:
+                session.odom.add(stamp_of(msg), pose_from_odometry(msg))
+            except InvalidInputError:  # non-finite values: skipped, and noted by the SLAM replay of the same bag
+                continue
         else:
             for tf in msg.transforms:
                 if tf.header.frame_id.lstrip("/") == map_frame and tf.child_frame_id.lstrip("/") == odom_frame:

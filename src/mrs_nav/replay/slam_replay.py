@@ -25,7 +25,7 @@ import numpy.typing as npt
 
 from mrs_nav.bag.io import read_messages
 from mrs_nav.bag.messages import pose_from_odometry, scan_from_message, stamp_of
-from mrs_nav.errors import BagError, MrsNavError
+from mrs_nav.errors import BagError, InvalidInputError, MrsNavError
 from mrs_nav.geometry import Pose2D, yaw_from_quaternion
 from mrs_nav.maps.map_io import save_map
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
@@ -65,6 +65,8 @@ class SlamReplay:
     odom_read: int = 0
     odom_out_of_order: int = 0
     odom_rejected: int = 0
+    poses_invalid: int = 0  # odometry or ground-truth messages with non-finite values, skipped
+    first_invalid_pose: str = ""
     bag_duration_s: float = 0.0
     cpu_s: float = 0.0
     wall_s: float = 0.0
@@ -169,7 +171,9 @@ def replay_slam(bag: Path, config: SlamConfig, progress: Callable[[int], None] |
                 progress(1)
         elif topic == ODOM_TOPIC:
             result.odom_read += 1
-            pose = pose_from_odometry(msg)
+            pose = _pose_or_none(msg, stamp, topic, result)
+            if pose is None:
+                continue  # nothing new to pair scans with
             if stamp <= odom.latest:
                 result.odom_out_of_order += 1
             elif max(abs(pose.x), abs(pose.y)) > MAX_COORDINATE_M:
@@ -177,8 +181,8 @@ def replay_slam(bag: Path, config: SlamConfig, progress: Callable[[int], None] |
                 result.odom_rejected += 1
             else:
                 odom.add(stamp, pose)
-        else:
-            truth.add(stamp, pose_from_odometry(msg))
+        elif (pose := _pose_or_none(msg, stamp, topic, result)) is not None:
+            truth.add(stamp, pose)
         # A scan is processed once odometry reaches its stamp; earlier scans never wait on later ones.
         while pending and odom.latest >= pending[0][0]:
             _process(result, *pending.popleft(), odom, truth)
@@ -215,6 +219,17 @@ def truth_scans(bag: Path, result: SlamReplay) -> Callable[[], Iterator[tuple[Po
                 yield pose.compose(slam.laser_pose), split_beams(scan, usable, slam.config.maxRange)
 
     return scans
+
+
+def _pose_or_none(msg: Any, stamp: float, topic: str, result: SlamReplay) -> Pose2D | None:
+    """The pose of an odometry message, or None (counted, the first reason kept) when its values are not finite:
+    one bad message is skipped, not the replay."""
+    try:
+        return pose_from_odometry(msg)
+    except InvalidInputError as err:
+        result.poses_invalid += 1
+        result.first_invalid_pose = result.first_invalid_pose or f"{topic} at {stamp:.3f} s: {err}"
+        return None
 
 
 def _check_pairing(bag: Path, result: SlamReplay) -> None:

@@ -338,3 +338,24 @@ def test_unreadable_inputs_and_overflowing_noise_are_one_error_line(args, messag
     assert len(err) == 1
     assert err[0].startswith("ERROR: ")
     assert message in err[0]
+
+
+@pytest.mark.parametrize("topic", ["/odom", "/ground_truth/odom"])
+def test_an_odometry_message_with_a_nan_is_skipped_with_a_note(topic, tmp_path, capsys):
+    bag = tmp_path / "nan.bag"
+    with BagWriter(bag) as writer:
+        for i, pose in enumerate(drive()):
+            t = 5.0 + 0.5 * i
+            writer.write("/scan", LASER_SCAN, round(t * 1e9), laser_scan_message(cast(pose), t, "base_scan"))
+            odom = odometry_message(pose, t, "odom", "base_footprint")
+            truth = odometry_message(pose, t, "map", "base_footprint")
+            if i == 10:
+                (odom if topic == "/odom" else truth).pose.pose.position.x = math.nan
+            writer.write("/odom", ODOMETRY, round(t * 1e9), odom)
+            writer.write("/ground_truth/odom", ODOMETRY, round(t * 1e9), truth)
+    code, summary, err = replay(bag, tmp_path / "out", capsys)
+    assert code == 0
+    note = f"NOTE: skipped 1 odometry or ground-truth messages with non-finite values (first: {topic} at 10.000 s"
+    assert note in err
+    assert summary["scans"] == len(drive())
+    assert summary["ate_rmse_m"] < 0.05
