@@ -57,6 +57,7 @@ from mrs_nav.slam.local_track import LocalTrack
 from mrs_nav.slam.matcher import (
     DistanceField,
     MatchResult,
+    Recoveries,
     ScanMatcher,
     match_in_grid,
     match_reach,
@@ -146,6 +147,7 @@ class Slam:
         c = self.config
         self._grid = new_map(c)
         self.matcher = ScanMatcher(c.sigma, c.search_linear, c.search_angular)
+        self._recoveries = Recoveries()
         self.loop_matcher = ScanMatcher(c.sigma, LOOP_SEARCH_M, LOOP_SEARCH_RAD)  # wide search, no odometry prior
         self.nodes: list[ProcessedScan] = []  # the pose graph's nodes (keyframes), with their beams
         self.edges: list[Edge] = []
@@ -157,6 +159,7 @@ class Slam:
         # Closures that moved the graph: the others already agreed with it (the drift went in some other way)
         self.loops_solved = 0
         self.clipped_in_rebuild = 0  # scans mapped clipped at the cell limit by rebuilds (rebuild_map)
+        self.scans_in_doubt = 0  # scans left out while a pose found far from odometry waited (match_in_grid)
         self._last_loop_attempt = 0.0
         self._mapped: list[Pose2D] = []  # the pose each node was mapped at
         # per node: scans in its place (SCANS_KEPT_PER_NODE), as (laser pose in the node's frame, beams)
@@ -224,7 +227,8 @@ class Slam:
     def add_scan(
         self, odom: Pose2D, scan: LaserScanData, stamp: float, laser_pose: Pose2D | None = None
     ) -> ProcessedScan | None:
-        """Process a scan taken at odometry pose ``odom`` if the gates allow; return what was done or None.
+        """Process a scan taken at odometry pose ``odom`` if the gates allow; return what was done, or None when
+        the gates leave it out or its pose is in doubt (:class:`mrs_nav.slam.matcher.Recoveries`; nothing changes).
 
         ``laser_pose``: base -> laser of this scan when it is not the usual mounting (a scan in another frame).
         Raises InvalidInputError, with the state unchanged, when the pose is far outside any building or the map
@@ -248,7 +252,10 @@ class Slam:
         if self.last is not None and points.shape[0] >= MIN_POINTS:
             sensor_prior = predicted.compose(mount)
             self._redraw_around(sensor_prior, reach + match_reach(self.matcher, c.delta))  # what the match reads
-            match = match_in_grid(self.matcher, self._grid, thinned, sensor_prior, spread)
+            match = match_in_grid(self.matcher, self._grid, thinned, sensor_prior, spread, self._recoveries)
+            if self._recoveries.pending is not None:
+                self.scans_in_doubt += 1
+                return None  # neither the match nor the pose found far from it is trusted: the next scan decides
             pose = match.pose.compose(mount.inverse())
         else:
             pose = predicted

@@ -43,6 +43,7 @@ def test_carmen2bag_then_replay(excerpt, tmp_path, capsys):
     assert set(summary) == {
         "scans",
         "scans_skipped",
+        "scans_in_doubt",
         "loops_closed",
         "loops_rejected",
         "loops_solved",

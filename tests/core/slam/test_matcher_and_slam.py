@@ -9,8 +9,9 @@ from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.motion_model import OdometryNoise, noisy_odometry
 from mrs_nav.slam import LaserScanData, Slam, SlamConfig
-from mrs_nav.slam.matcher import thin_points
+from mrs_nav.slam.matcher import Recoveries, match_in_grid, thin_points
 from mrs_nav.slam.metrics import trajectory_errors
+from mrs_nav.slam.scan import split_beams
 
 from .synthetic import cast
 
@@ -182,3 +183,45 @@ def test_a_scan_metres_on_is_found_beyond_the_usual_window_where_odometry_spread
     assert done is not None
     assert math.hypot(done.pose.x - true.x, done.pose.y - true.y) < 0.01
     assert abs(done.pose.yaw - true.yaw) < math.radians(0.5)
+
+
+def test_a_turn_odometry_missed_is_taken_when_the_next_scan_asks_for_the_same_correction():
+    # Odometry misses an 80 degree turn: the first scan after it is found all round but left out (in doubt); the
+    # next one, lost the same way, confirms the correction and is placed where it is.
+    slam = Slam(SlamConfig(linearUpdate=0.0, angularUpdate=0.0))
+    start = Pose2D(-1.0, 0.5, 0.2)
+    slam.add_scan(start, cast(start), 0.0)
+    turned = math.radians(80.0)
+    first, second = Pose2D(-0.9, 0.5, 0.2 + turned), Pose2D(-0.8, 0.5, 0.2 + turned)
+    assert slam.add_scan(Pose2D(-0.9, 0.5, 0.2), cast(first), 1.0) is None
+    assert slam.scans_in_doubt == 1
+    done = slam.add_scan(Pose2D(-0.8, 0.5, 0.2), cast(second), 2.0)
+    assert done is not None
+    assert math.hypot(done.pose.x - second.x, done.pose.y - second.y) < 0.01
+    assert abs(done.pose.yaw - second.yaw) < math.radians(0.5)
+    assert len(slam.processed) == 2  # the scan in doubt left nothing behind
+
+
+def test_a_far_fit_is_taken_only_when_consecutive_scans_agree_on_it():
+    slam = Slam(SlamConfig(linearUpdate=0.0, angularUpdate=0.0))
+    true = Pose2D(-1.0, 0.5, 0.2)
+    slam.add_scan(true, cast(true), 0.0)
+    scan = cast(true)
+    points = thin_points(split_beams(scan, scan.range_max, 0.0).hit_points, slam.config.delta)
+    recoveries = Recoveries()
+
+    def match(yaw_error_deg: float) -> Pose2D | None:
+        prior = Pose2D(true.x, true.y, true.yaw + math.radians(yaw_error_deg))
+        found = match_in_grid(slam.matcher, slam.grid, points, prior, (0.01, 0.01), recoveries)
+        return None if recoveries.pending is not None else found.pose
+
+    assert match(80.0) is None  # found all round: in doubt
+    assert match(-70.0) is None  # found again, but asking for another correction: still in doubt
+    taken = match(-70.0)  # the same correction as the scan before: taken
+    assert taken is not None
+    assert abs(taken.yaw - true.yaw) < math.radians(0.5)
+    assert match(80.0) is None
+    near = match(2.0)  # matched near the prediction: the correction held is dropped
+    assert near is not None
+    assert abs(near.yaw - true.yaw) < math.radians(0.5)
+    assert match(80.0) is None
