@@ -147,7 +147,9 @@ def test_a_map_rebuilt_lazily_is_the_map_rebuilt_at_once(monkeypatch, margin):
     # doc). Reading the whole map after every scan draws every out-of-date tile at once, as the rebuild of the
     # whole map at each closure did: the poses and the map must come out the same to the bit. The drive's own
     # closures agree with the graph (no rebuild), so every 40 scans a correction bends the graph's first half.
-    # With no margin each drawing holds only what the next scan reads or maps.
+    # With no margin each drawing holds only what the next scan reads or maps. Right after each bend a scan with
+    # too few returns to be matched is mapped where odometry puts it: the map it reaches is drawn first (no match
+    # read it).
     monkeypatch.setattr(slam_module, "REDRAW_MARGIN_M", margin)
     truth = drive()
     odom = drifting_odometry(truth, 0, 1.03)
@@ -164,6 +166,17 @@ def test_a_map_rebuilt_lazily_is_the_map_rebuilt_at_once(monkeypatch, margin):
                 ]
                 slam.nodes = bent + slam.nodes[half:]
                 slam.rebuild_map()
+                scan = cast(gt, walls=RING)
+                every = slice(None, None, scan.ranges.size // 6)  # 6 beams, fewer than MIN_POINTS returns
+                sparse = np.full_like(scan.ranges, np.inf)
+                sparse[every] = scan.ranges[every]
+                done = slam.add_scan(od, dataclasses.replace(scan, ranges=sparse), i + 0.5)
+                assert done is not None
+                assert done.match is None
+                reach = float(sparse[np.isfinite(sparse)].max())  # its farthest beam
+                assert not slam._grid.stale_regions(
+                    (done.pose.x - reach, done.pose.y - reach, done.pose.x + reach, done.pose.y + reach)
+                )
             if eager:
                 slam.grid  # noqa: B018 - reading the map draws all of it
             out_of_date = max(out_of_date, slam._grid.stale_tiles)  # what the map left to draw
