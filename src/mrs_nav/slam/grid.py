@@ -42,7 +42,8 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
+from typing import Any, TypeVar
 
 import numba
 import numpy as np
@@ -56,8 +57,8 @@ IntArray = npt.NDArray[np.int64]
 Float32Array = npt.NDArray[np.float32]
 TileTable = npt.NDArray[np.int32]
 TILE = 8  # cells a tile side: 0.4 m at 5 cm, so that the hit tiles along a wall hold little besides it
-# (mrs_nav.slam.matcher's kernels compile TILE in, and numba's cache of them does not see it change here: after
-# changing it, delete the cached kernels, mrs_nav/slam/__pycache__/*.nbi and *.nbc.)
+# (mrs_nav.slam.matcher's kernels compile TILE and _tile_value in, and numba's cache of them does not see either
+# change here: after changing them, delete the cached kernels, mrs_nav/slam/__pycache__/*.nbi and *.nbc.)
 # A grid's cells (LogOddsGrid.cells): height, width, and the shift of cell (0, 0) into its tile, rows and columns.
 GridCells = tuple[int, int, int, int]
 # A grid as compiled kernels take it (LogOddsGrid.kernel_args): the log-odds tile table and pool, the hit tile
@@ -463,6 +464,67 @@ def _lookup(
 _TILED = "int32[:, ::1], float32[:, :, ::1], UniTuple(int64, 4)"  # a tile table, its pool, the grid's cells
 
 
+# The tile arithmetic of one cell, once, for the kernels here and in mrs_nav.slam.matcher: ``(gy, gx)`` is a cell
+# shifted into the tiles, ``(iy + shift_y, ix + shift_x)`` (module docstring).
+_Helper = TypeVar("_Helper", bound=Callable[..., Any])
+
+
+def _cell_helper(signature: str) -> Callable[[_Helper], _Helper]:
+    """``numba.njit(signature, cache=True)`` without numba's reference counting (``_nrt=False``), for the small
+    helpers below: they only index arrays their caller holds, and so LLVM inlines them into the kernels' loops,
+    where they cost nothing. Why: with it, every call counts references to each array it is given, counts that
+    numba cannot drop around the helpers' branches; on synthetic scans redraw then took 1.7-2 times as long as
+    with the blocks written out (inlined as numba IR, ``inline="always"``, or by LLVM, ``forceinline=True``),
+    integrate 1.15-1.3 times. (numba's type stubs do not list ``_nrt``.)"""
+    compile_: Callable[[_Helper], _Helper] = numba.njit(signature, _nrt=False, cache=True)  # type: ignore[call-overload]
+    return compile_
+
+
+@_cell_helper("float32(int32[:, ::1], float32[:, :, ::1], int64, int64)")
+def _tile_value(table: TileTable, pool: Float32Array, gy: int, gx: int) -> np.float32:
+    """Cell ``(gy, gx)`` of a tiled array; 0 in a tile not allocated (an unknown cell: no log-odds, no hits)."""
+    slot = table[gy // TILE, gx // TILE]
+    return pool[slot, gy % TILE, gx % TILE] if slot >= 0 else np.float32(0.0)
+
+
+@_cell_helper("int64(int32[:, ::1], int64[::1], int64, int64, int64)")
+def _taken_slot(table: TileTable, tiles: IntArray, kind: int, gy: int, gx: int) -> int:
+    """The pool slot of the tile of cell ``(gy, gx)`` in ``table``; where the tile has none, the next spare one,
+    counting ``tiles[kind]`` (0 log-odds, 1 hits) up: the caller made room (LogOddsGrid._reserve)."""
+    ty, tx = gy // TILE, gx // TILE
+    slot: int = table[ty, tx]
+    if slot < 0:
+        slot = tiles[kind]
+        tiles[kind] += 1
+        table[ty, tx] = slot
+    return slot
+
+
+@_cell_helper("void(" + GRID_ARRAYS_TYPE + ", int64[::1], float64, float64, int64, int64)")
+def _add_hit(  # noqa: PLR0917 - numba kernels take positional arguments
+    grid: GridArrays, tiles: IntArray, ex: float, ey: float, iy: int, ix: int
+) -> None:
+    """An end point ``(ex, ey)`` (m) added to the hit sums and count of its cell ``(iy, ix)`` (inside the grid),
+    for :func:`_integrate` and :func:`_redraw` alike, so that a redrawn tile holds what integrating put there."""
+    _, _, hit_table, hit_x, hit_y, hit_count, cells, origin_x, origin_y, res = grid
+    gy, gx = iy + cells[2], ix + cells[3]
+    slot = _taken_slot(hit_table, tiles, 1, gy, gx)
+    hit_x[slot, gy % TILE, gx % TILE] += ex - (origin_x + ix * res)
+    hit_y[slot, gy % TILE, gx % TILE] += ey - (origin_y + iy * res)
+    hit_count[slot, gy % TILE, gx % TILE] += 1.0
+
+
+@_cell_helper("void(float32[:, :, ::1], int64, int64, int64, float32, float32)")
+def _add_clamped(  # noqa: PLR0917 - numba kernels take positional arguments
+    logodds: Float32Array, slot: int, gy: int, gx: int, change: float, lmax: float
+) -> None:
+    """``change`` (loccupied, or minus lfree: float32, as the grid's own arithmetic rounds) added to the log-odds
+    of cell ``(gy, gx)`` in pool slot ``slot``, clamped to ``[-lmax, lmax]``; one arithmetic for
+    :func:`_integrate` and :func:`_redraw`, so that both give a cell the same value to the bit."""
+    cell = logodds[slot, gy % TILE, gx % TILE] + change
+    logodds[slot, gy % TILE, gx % TILE] = min(max(cell, -lmax), lmax)
+
+
 @numba.njit("float32[::1](" + _TILED + ", int64[::1], int64[::1])", cache=True)  # type: ignore[misc]
 def _cells(table: TileTable, pool: Float32Array, cells: GridCells, iy: IntArray, ix: IntArray) -> Float32Array:
     """Values of cells ``(iy, ix)`` of a tiled array; 0 outside the grid and in tiles not allocated."""
@@ -470,10 +532,7 @@ def _cells(table: TileTable, pool: Float32Array, cells: GridCells, iy: IntArray,
     out = np.zeros(iy.size, dtype=np.float32)
     for k in range(iy.size):
         if 0 <= iy[k] < height and 0 <= ix[k] < width:
-            gy, gx = iy[k] + shift_y, ix[k] + shift_x
-            slot = table[gy // TILE, gx // TILE]
-            if slot >= 0:
-                out[k] = pool[slot, gy % TILE, gx % TILE]
+            out[k] = _tile_value(table, pool, iy[k] + shift_y, ix[k] + shift_x)
     return out
 
 
@@ -488,10 +547,7 @@ def _window(
     out = np.zeros((max(y1 - y0, 0), max(x1 - x0, 0)), dtype=np.float32)
     for iy in range(y0, y1):
         for ix in range(x0, x1):
-            gy, gx = iy + shift_y, ix + shift_x
-            slot = table[gy // TILE, gx // TILE]
-            if slot >= 0:
-                out[iy - y0, ix - x0] = pool[slot, gy % TILE, gx % TILE]
+            out[iy - y0, ix - x0] = _tile_value(table, pool, iy + shift_y, ix + shift_x)
     return out
 
 
@@ -543,7 +599,7 @@ def _integrate(  # noqa: PLR0917 - numba kernels take positional arguments
     """LogOddsGrid.integrate's ray casting: beams from ``sensor`` (m) in directions ``(cos, sin)`` of length
     ``ranges`` (m), the first ``n_hit`` ending on an obstacle; ``update``: lfree, loccupied, lmax. New tiles are
     taken from the pools' spare slots, counting ``tiles`` (log-odds, hits) up: the caller made room."""
-    table, logodds, hit_table, hit_x, hit_y, hit_count, cells, origin_x, origin_y, res = grid
+    table, logodds, _, _, _, _, cells, origin_x, origin_y, res = grid
     height, width, shift_y, shift_x = cells
     sx, sy = sensor
     lfree, loccupied, lmax = update[0], update[1], update[2]
@@ -567,15 +623,7 @@ def _integrate(  # noqa: PLR0917 - numba kernels take positional arguments
         ix = math.floor((ex - origin_x) / res)
         iy = math.floor((ey - origin_y) / res)
         if 0 <= ix < width and 0 <= iy < height:
-            gy, gx = iy + shift_y, ix + shift_x
-            slot = hit_table[gy // TILE, gx // TILE]
-            if slot < 0:
-                slot = tiles[1]
-                tiles[1] += 1
-                hit_table[gy // TILE, gx // TILE] = slot
-            hit_x[slot, gy % TILE, gx % TILE] += ex - (origin_x + ix * res)
-            hit_y[slot, gy % TILE, gx % TILE] += ey - (origin_y + iy * res)
-            hit_count[slot, gy % TILE, gx % TILE] += 1.0
+            _add_hit(grid, tiles, ex, ey, iy, ix)
             mark[iy - y_lo, ix - x_lo] = _HIT
     # Every beam sampled at half a cell up to half a cell before its end, so no crossed cell is skipped on
     # axis-aligned beams and the end cell is left to the occupied update.
@@ -595,14 +643,36 @@ def _integrate(  # noqa: PLR0917 - numba kernels take positional arguments
             if mark[row, col] == 0:
                 continue
             gx = x_lo + col + shift_x
-            slot = table[gy // TILE, gx // TILE]
-            if slot < 0:
-                slot = tiles[0]
-                tiles[0] += 1
-                table[gy // TILE, gx // TILE] = slot
-            cell = logodds[slot, gy % TILE, gx % TILE]
-            cell = cell - lfree if mark[row, col] == _FREE else cell + loccupied
-            logodds[slot, gy % TILE, gx % TILE] = min(max(cell, -lmax), lmax)
+            slot = _taken_slot(table, tiles, 0, gy, gx)
+            _add_clamped(logodds, slot, gy, gx, -lfree if mark[row, col] == _FREE else loccupied, lmax)
+
+
+@_cell_helper(
+    "void(int32[:, ::1], float32[:, :, ::1], int64[::1], int32[::1], uint64[::1], int64, int64, int64, float32, "
+    "float32)"
+)
+def _update_once(  # noqa: PLR0917 - numba kernels take positional arguments
+    table: TileTable,
+    logodds: Float32Array,
+    tiles: IntArray,
+    marked_by: npt.NDArray[np.int32],
+    marks: npt.NDArray[np.uint64],
+    number: int,
+    gy: int,
+    gx: int,
+    change: float,
+    lmax: float,
+) -> None:
+    """:func:`_redraw`'s update of cell ``(gy, gx)`` by scan ``number``, for end points and crossed cells alike:
+    the tile's log-odds slot taken (a spare one if it has none), then, if the scan has not marked the cell yet
+    (``marked_by``, ``marks``: _redraw), the cell marked and ``change`` added (:func:`_add_clamped`)."""
+    slot = _taken_slot(table, tiles, 0, gy, gx)
+    if marked_by[slot] != number:
+        marked_by[slot], marks[slot] = number, 0
+    bit = np.uint64(1) << np.uint64(gy % TILE * TILE + gx % TILE)
+    if marks[slot] & bit == 0:
+        marks[slot] |= bit
+        _add_clamped(logodds, slot, gy, gx, change, lmax)
 
 
 @numba.njit(  # type: ignore[misc]
@@ -639,7 +709,7 @@ def _redraw(  # noqa: PLR0917 - numba kernels take positional arguments
     calls of one redraw numbered those before) and ``marks`` which cells it updated, a bit each: a cell is
     updated when a scan first marks it, end points first, so once per scan, occupied where the scan holds an end
     point, else free."""
-    table, logodds, hit_table, hit_x, hit_y, hit_count, cells, origin_x, origin_y, res = grid
+    table, logodds, _, _, _, _, cells, origin_x, origin_y, res = grid
     height, width, shift_y, shift_x = cells
     lfree, loccupied, lmax = update[0], update[1], update[2]
     step = 0.5 * res
@@ -663,26 +733,8 @@ def _redraw(  # noqa: PLR0917 - numba kernels take positional arguments
             gy, gx = iy + shift_y, ix + shift_x
             if not target[gy // TILE, gx // TILE]:
                 continue
-            slot = hit_table[gy // TILE, gx // TILE]
-            if slot < 0:
-                slot = tiles[1]
-                tiles[1] += 1
-                hit_table[gy // TILE, gx // TILE] = slot
-            hit_x[slot, gy % TILE, gx % TILE] += ex - (origin_x + ix * res)
-            hit_y[slot, gy % TILE, gx % TILE] += ey - (origin_y + iy * res)
-            hit_count[slot, gy % TILE, gx % TILE] += 1.0
-            slot = table[gy // TILE, gx // TILE]
-            if slot < 0:
-                slot = tiles[0]
-                tiles[0] += 1
-                table[gy // TILE, gx // TILE] = slot
-            if marked_by[slot] != number:
-                marked_by[slot], marks[slot] = number, 0
-            bit = np.uint64(1) << np.uint64(gy % TILE * TILE + gx % TILE)
-            if marks[slot] & bit == 0:
-                marks[slot] |= bit
-                cell = logodds[slot, gy % TILE, gx % TILE] + loccupied
-                logodds[slot, gy % TILE, gx % TILE] = min(max(cell, -lmax), lmax)
+            _add_hit(grid, tiles, ex, ey, iy, ix)
+            _update_once(table, logodds, tiles, marked_by, marks, number, gy, gx, loccupied, lmax)
         for b in range(starts[s], starts[s + 1]):
             length = ranges[b] - 0.5 * res if b - starts[s] < n_hits[s] else ranges[b]
             samples = max(math.ceil(length / step), 0)
@@ -715,15 +767,4 @@ def _redraw(  # noqa: PLR0917 - numba kernels take positional arguments
                     gy, gx = iy + shift_y, ix + shift_x
                     if not target[gy // TILE, gx // TILE]:
                         continue
-                    slot = table[gy // TILE, gx // TILE]
-                    if slot < 0:
-                        slot = tiles[0]
-                        tiles[0] += 1
-                        table[gy // TILE, gx // TILE] = slot
-                    if marked_by[slot] != number:
-                        marked_by[slot], marks[slot] = number, 0
-                    bit = np.uint64(1) << np.uint64(gy % TILE * TILE + gx % TILE)
-                    if marks[slot] & bit == 0:
-                        marks[slot] |= bit
-                        cell = logodds[slot, gy % TILE, gx % TILE] - lfree
-                        logodds[slot, gy % TILE, gx % TILE] = min(max(cell, -lmax), lmax)
+                    _update_once(table, logodds, tiles, marked_by, marks, number, gy, gx, -lfree, lmax)

@@ -37,6 +37,7 @@ from mrs_nav.slam.grid import (
     IntArray,
     LogOddsGrid,
     TileTable,
+    _tile_value,
 )
 
 COARSE = 4  # cells per coarse translation step
@@ -399,6 +400,7 @@ def _mean_hit(grid: GridArrays, iy: int, ix: int) -> tuple[float, float]:
     """LogOddsGrid.mean_hits of one cell."""
     _, _, hit_table, hit_x, hit_y, hit_count, cells, origin_x, origin_y, res = grid
     gy, gx = iy + cells[2], ix + cells[3]
+    # The slot looked up once for the three pools: _tile_value for each took a quarter longer in the refinement.
     slot = hit_table[gy // TILE, gx // TILE]
     # np.float64, not float(): numba's float() of a float32 stays float32, and so would the division.
     count = np.float64(hit_count[slot, gy % TILE, gx % TILE]) if slot >= 0 else 0.0
@@ -421,12 +423,8 @@ def _normal_at(grid: GridArrays, iy: int, ix: int) -> float:
         gy = min(max(iy + oy, 0), height - 1)
         for ox in range(-NORMAL_RADIUS, NORMAL_RADIUS + 1):
             gx = min(max(ix + ox, 0), width - 1)
-            ty, tx = (gy + shift_y) // TILE, (gx + shift_x) // TILE
-            row, col = (gy + shift_y) % TILE, (gx + shift_x) % TILE
-            slot, hits = table[ty, tx], hit_table[ty, tx]
-            if slot < 0 or hits < 0:
-                continue
-            if logodds[slot, row, col] > 0.0 and hit_count[hits, row, col] > 0.0:
+            occupied = _tile_value(table, logodds, gy + shift_y, gx + shift_x) > 0.0
+            if occupied and _tile_value(hit_table, hit_count, gy + shift_y, gx + shift_x) > 0.0:
                 px[n], py[n] = _mean_hit(grid, gy, gx)
                 n += 1
     if n < 3:
@@ -649,8 +647,7 @@ def _truncated_field(  # noqa: PLR0917 - numba kernels take positional arguments
         gy = y0 + row + shift_y
         for col in range(width):
             gx = x0 + col + shift_x
-            slot = table[gy // TILE, gx // TILE]
-            if slot < 0 or not logodds[slot, gy % TILE, gx % TILE] > 0.0:
+            if not _tile_value(table, logodds, gy, gx) > 0.0:
                 continue
             occupied += 1
             for r in range(max(row - reach, 0), min(row + reach, height - 1) + 1):

@@ -172,10 +172,12 @@ class Slam:
         # With loop closure, consecutive nodes are linked by the local track's motion (mrs_nav.slam.local_track)
         self._local = LocalTrack(c, self.matcher) if c.loop_closure else None
         self._node_local: list[tuple[Pose2D, float]] = []  # each node's local-track pose and travel
-        # The nodes' (x, y, yaw) for _nearest_node and the node list they are of: extended as nodes are appended,
-        # taken anew when a loop closure replaces the list (made from the whole list for every scan, they cost
-        # 1 ms a scan on the Freiburg 079 log, 6 % of its CPU).
+        # The nodes' (x, y, yaw) for _nearest_node, in the first _node_count rows, and the node list they are of:
+        # extended as nodes are appended, taken anew when a loop closure replaces the list (made from the whole
+        # list for every scan, they cost 1 ms a scan on the Freiburg 079 log, 6 % of its CPU). Rows to spare,
+        # doubled when full: copied into a new array for every node, they would cost O(nodes^2) over a log.
         self._node_poses: FloatArray = np.empty((0, 3))
+        self._node_count = 0
         self._node_poses_of = self.nodes
 
     @property
@@ -289,11 +291,16 @@ class Slam:
         if not self.nodes:
             return None
         if self._node_poses_of is not self.nodes:
-            self._node_poses, self._node_poses_of = np.empty((0, 3)), self.nodes
-        if len(self._node_poses) < len(self.nodes):
-            added = [(n.pose.x, n.pose.y, n.pose.yaw) for n in self.nodes[len(self._node_poses) :]]
-            self._node_poses = np.concatenate([self._node_poses, np.array(added, dtype=np.float64)])
-        xy = self._node_poses
+            self._node_count, self._node_poses_of = 0, self.nodes
+        count, nodes = self._node_count, len(self.nodes)
+        if count < nodes:
+            if nodes > len(self._node_poses):
+                grown = np.empty((max(nodes, 2 * len(self._node_poses)), 3))
+                grown[:count] = self._node_poses[:count]
+                self._node_poses = grown
+            self._node_poses[count:nodes] = [(n.pose.x, n.pose.y, n.pose.yaw) for n in self.nodes[count:]]
+            self._node_count = nodes
+        xy = self._node_poses[:nodes]
         distance = np.hypot(xy[:, 0] - pose.x, xy[:, 1] - pose.y)
         turned = np.abs(np.remainder(xy[:, 2] - pose.yaw + math.pi, math.tau) - math.pi)
         distance[(distance >= KEYFRAME_RADIUS_M) | (turned >= KEYFRAME_HEADING_RAD)] = np.inf
