@@ -295,7 +295,8 @@ class LogOddsGrid:
             target[ty0:ty1, tx0:tx1] = self.stale[ty0:ty1, tx0:tx1]
         self._reserve(int(np.count_nonzero(target & (self.table < 0))), 0)
         spare_hits = int(np.count_nonzero(target & (self.hit_table < 0)))
-        clip = np.array(rects, dtype=np.int64).reshape(-1, 4)
+        # The rectangles in metres, a cell wider each side, for clipping beams
+        boxes = np.array([self.tiles_box(rect) for rect in rects], dtype=np.float64).reshape(-1, 4)
         update = np.array([self.lfree, self.loccupied, self.lmax], dtype=np.float32)
         # Per log-odds pool slot: the number (from 1) of the last scan that marked a cell of the tile, and which
         # cells it marked, a bit each (12 bytes a tile; pages mapped only where written)
@@ -311,7 +312,7 @@ class LogOddsGrid:
                 self.kernel_args(),
                 self.tiles,
                 target,
-                clip,
+                boxes,
                 marked_by,
                 marks,
                 done,
@@ -678,7 +679,7 @@ def _update_once(  # noqa: PLR0917 - numba kernels take positional arguments
 @numba.njit(  # type: ignore[misc]
     "void("
     + GRID_ARRAYS_TYPE
-    + ", int64[::1], boolean[:, ::1], int64[:, ::1], int32[::1], uint64[::1], int64, float64[:, ::1], float64[::1],"
+    + ", int64[::1], boolean[:, ::1], float64[:, ::1], int32[::1], uint64[::1], int64, float64[:, ::1], float64[::1],"
     " float64[::1], float64[::1], int64[::1], int64[::1], float32[::1])",
     cache=True,
 )
@@ -686,7 +687,7 @@ def _redraw(  # noqa: PLR0917 - numba kernels take positional arguments
     grid: GridArrays,
     tiles: IntArray,
     target: npt.NDArray[np.bool_],
-    rects: IntArray,
+    boxes: FloatArray,
     marked_by: npt.NDArray[np.int32],
     marks: npt.NDArray[np.uint64],
     first: int,
@@ -700,8 +701,8 @@ def _redraw(  # noqa: PLR0917 - numba kernels take positional arguments
 ) -> None:
     """LogOddsGrid.redraw: :func:`_integrate` of scan ``s`` (from ``sensors[s]``, beams ``starts[s]`` to
     ``starts[s + 1]``, the first ``n_hits[s]`` ending on an obstacle) for each scan in order, into the
-    ``target`` tiles only, which lie in the tile rectangles ``rects`` (rows ty0, ty1, columns tx0, tx1). Each
-    beam is sampled only over the parts of it that can cross ``rects``: the same samples as _integrate takes
+    ``target`` tiles only, which lie in the boxes ``boxes`` (m: x0, y0, x1, y1, LogOddsGrid.tiles_box). Each
+    beam is sampled only over the parts of it that can cross ``boxes``: the same samples as _integrate takes
     there, so those tiles get the same values.
 
     Instead of _integrate's marks over the scan's whole window, per log-odds pool slot ``marked_by`` holds the
@@ -713,13 +714,6 @@ def _redraw(  # noqa: PLR0917 - numba kernels take positional arguments
     height, width, shift_y, shift_x = cells
     lfree, loccupied, lmax = update[0], update[1], update[2]
     step = 0.5 * res
-    # Each rectangle in metres, a cell wider each side, for clipping beams
-    clip = np.empty((rects.shape[0], 4))
-    for r in range(rects.shape[0]):
-        clip[r, 0] = origin_x + (rects[r, 2] * TILE - shift_x - 1) * res
-        clip[r, 1] = origin_x + (rects[r, 3] * TILE - shift_x + 1) * res
-        clip[r, 2] = origin_y + (rects[r, 0] * TILE - shift_y - 1) * res
-        clip[r, 3] = origin_y + (rects[r, 1] * TILE - shift_y + 1) * res
     for s in range(starts.size - 1):
         number = first + s + 1
         sx, sy = sensors[s, 0], sensors[s, 1]
@@ -738,13 +732,13 @@ def _redraw(  # noqa: PLR0917 - numba kernels take positional arguments
         for b in range(starts[s], starts[s + 1]):
             length = ranges[b] - 0.5 * res if b - starts[s] < n_hits[s] else ranges[b]
             samples = max(math.ceil(length / step), 0)
-            for r in range(rects.shape[0]):
+            for r in range(boxes.shape[0]):
                 # The samples whose distance along the beam lies where it crosses the rectangle, and one more
                 # each side: the cell test below decides, as in _integrate.
                 t_lo, t_hi = 0.0, samples * step
                 for start, direction, lo, hi in (
-                    (sx, cos[b], clip[r, 0], clip[r, 1]),
-                    (sy, sin[b], clip[r, 2], clip[r, 3]),
+                    (sx, cos[b], boxes[r, 0], boxes[r, 2]),
+                    (sy, sin[b], boxes[r, 1], boxes[r, 3]),
                 ):
                     if direction == 0.0:
                         if not lo <= start <= hi:
