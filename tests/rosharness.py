@@ -174,6 +174,16 @@ def stall_report(master_uri: str, limit: int = 30) -> list[str]:
     return [f"connections the master lists and the publisher lacks: {listed or 'none'}", *stacks]
 
 
+def last_warnings(launch_logs: Path, per_node: int = 2) -> list[str]:
+    """The last ``per_node`` warnings or errors in each rospy node log of a launch's log folder, named by file."""
+    out = []
+    for path in sorted(p for p in launch_logs.glob("*/*.log") if p.parent.name != "latest"):
+        lines = path.read_text(errors="replace").splitlines()
+        warnings = [line for line in lines if "][WARNING]" in line or "][ERROR]" in line]
+        out += [f"{path.name}: {line}" for line in warnings[-per_node:]]
+    return out
+
+
 class RosMaster:
     """A roscore on a free loopback port, with its logs under ``log_dir``."""
 
@@ -210,13 +220,19 @@ class RosMaster:
     def launch(self, launch_file: str, *args: str, name: str | None = None) -> Iterator[subprocess.Popen[bytes]]:
         """Run ``roslaunch mrs_nav LAUNCH_FILE ARGS`` for the duration of the ``with`` block."""
         log = self.log_dir / f"{name or Path(launch_file).stem}-{time.monotonic_ns()}.log"
-        with process(["roslaunch", "--wait", "mrs_nav", launch_file, *args], self.env, log) as proc:
+        # Each launch's node logs in a folder of its own: a later launch's nodes of the same names would overwrite
+        # them (roslaunch numbers them per launch), and a failure is read from them after the whole run.
+        nodes = log.with_suffix("")
+        with process(
+            ["roslaunch", "--wait", "mrs_nav", launch_file, *args], {**self.env, "ROS_LOG_DIR": str(nodes)}, log
+        ) as proc:
             try:
                 yield proc
             except AssertionError as err:
                 if str(err).startswith("timed out"):
-                    for note in stall_report(self.uri):
+                    for note in [*stall_report(self.uri), *last_warnings(nodes)]:
                         err.add_note(note)
+                err.add_note(f"roslaunch log: {log}; its nodes' logs: {nodes}")
                 raise
-        # Keep the launch log next to the failure: pytest shows it with -rA on error.
-        print(f"roslaunch log: {log}")
+        # Keep the launch log next to the test's output: pytest shows it with -rA.
+        print(f"roslaunch log: {log}; its nodes' logs: {nodes}")

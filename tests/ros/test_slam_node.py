@@ -154,8 +154,9 @@ def test_a_scan_in_another_frame_never_resets_the_map(slam_sim: tuple[Any, Any])
             return [m for m in logs if "'no_such_frame'" in m and "frames on tf: " in m]
 
         wait_for(lambda: bool(warnings()), 30.0, "the warning")
-        frames = warnings()[0].split("frames on tf: ")[1].rstrip(")").split(", ")
-        assert {"base_footprint", "base_scan", "odom"} <= set(frames)
+        frames, statics = warnings()[0].split("frames on tf: ")[1].rstrip(")").split("; ")
+        assert {"base_footprint", "base_scan", "odom"} <= set(frames.split(", "))
+        assert statics == "/tf_static publishers connected: 1"  # robot_state_publisher's
 
         rospy.wait_for_service("/slam/reset", timeout=30.0)
         rospy.ServiceProxy("/slam/reset", Empty)()

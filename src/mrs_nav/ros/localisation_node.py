@@ -39,7 +39,7 @@ from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.geometry import FloatArray, Pose2D, format_point
 from mrs_nav.localisation import BeamScan, LocalisationConfig, ParticleFilter, PoseEstimate
 from mrs_nav.ros.conversions import pose_from_msg, pose_msg
-from mrs_nav.ros.map_odom import MapOdomBroadcaster, check_timing, known_frames, lookup_pose
+from mrs_nav.ros.map_odom import MapOdomBroadcaster, check_timing, lookup_pose, tf_state
 from mrs_nav.ros.navigation_conversions import grid_from_msg
 from mrs_nav.ros.params import private_param
 
@@ -211,7 +211,7 @@ class LocalisationNode:
             rospy.logwarn_throttle(
                 5.0,
                 f"localisation: skipping scan at {stamp.to_sec():.3f}, no transform: {err} "
-                f"(frames on tf: {known_frames(self._buffer)})",
+                f"({tf_state(self._buffer, self._listener)})",
             )
             return
         self._publish_estimate(estimate, particles, stamp)

@@ -70,8 +70,11 @@ def lookup_pose(buffer: tf2_ros.Buffer, parent: str, child: str, stamp: rospy.Ti
     return pose_from_transform(buffer.lookup_transform(parent, child, stamp, rospy.Duration(wait)))
 
 
-def known_frames(buffer: tf2_ros.Buffer) -> str:
-    """The frames ``buffer`` has heard of, for a warning about a frame it lacks ("none" before any tf arrived)."""
+def tf_state(buffer: tf2_ros.Buffer, listener: tf2_ros.TransformListener) -> str:
+    """What tf has given a node, for a warning about a frame it lacks: the frames ``buffer`` has heard of ("none"
+    before any tf arrived), and how many ``/tf_static`` publishers ``listener`` is connected to (0: no
+    robot_state_publisher or static_transform_publisher runs, or this node has not reached it)."""
     tree = yaml.safe_load(buffer.all_frames_as_yaml()) or {}
     frames = set(tree) | {str(entry.get("parent")) for entry in tree.values()}
-    return ", ".join(sorted(frames)) or "none"
+    statics = listener.tf_static_sub.get_num_connections()
+    return f"frames on tf: {', '.join(sorted(frames)) or 'none'}; /tf_static publishers connected: {statics}"

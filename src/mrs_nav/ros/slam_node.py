@@ -31,7 +31,7 @@ from std_srvs.srv import Empty, EmptyRequest, EmptyResponse
 from mrs_nav.errors import MrsNavError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.ros.conversions import any_reading, pose_msg, scan_data
-from mrs_nav.ros.map_odom import MapOdomBroadcaster, check_timing, known_frames, lookup_pose
+from mrs_nav.ros.map_odom import MapOdomBroadcaster, check_timing, lookup_pose, tf_state
 from mrs_nav.ros.navigation_conversions import publish_unless_shutdown
 from mrs_nav.ros.params import private_param
 from mrs_nav.slam import Slam, SlamConfig
@@ -117,7 +117,7 @@ class SlamNode:
                 rospy.logwarn_throttle(
                     5.0,
                     f"slam: dropping scans in frame {msg.header.frame_id!r}: no transform to the base: {err} "
-                    f"(frames on tf: {known_frames(self._buffer)})",
+                    f"({tf_state(self._buffer, self._listener)})",
                 )
                 return
             odom = self._lookup(self.config.odom_frame, self.config.base_frame, msg.header.stamp)
