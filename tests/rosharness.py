@@ -223,6 +223,7 @@ class RosMaster:
         # Each launch's node logs in a folder of its own: a later launch's nodes of the same names would overwrite
         # them (roslaunch numbers them per launch), and a failure is read from them after the whole run.
         nodes = log.with_suffix("")
+        where = f"roslaunch log: {log}; its nodes' logs: {nodes}"
         with process(
             ["roslaunch", "--wait", "mrs_nav", launch_file, *args], {**self.env, "ROS_LOG_DIR": str(nodes)}, log
         ) as proc:
@@ -232,7 +233,7 @@ class RosMaster:
                 if str(err).startswith("timed out"):
                     for note in [*stall_report(self.uri), *last_warnings(nodes)]:
                         err.add_note(note)
-                err.add_note(f"roslaunch log: {log}; its nodes' logs: {nodes}")
+                err.add_note(where)
                 raise
         # Keep the launch log next to the test's output: pytest shows it with -rA.
-        print(f"roslaunch log: {log}; its nodes' logs: {nodes}")
+        print(where)

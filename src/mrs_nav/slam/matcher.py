@@ -193,14 +193,14 @@ def match_reach(matcher: ScanMatcher, resolution: float) -> float:
     return window + FIELD_MAX_DISTANCE + (NORMAL_RADIUS + 2) * resolution
 
 
+@dataclass
 class Recoveries:
     """The wide searches of one map's scans (:func:`match_in_grid`): the correction of its prediction that the
     last scan's search asked for, held until the next scan's search confirms or drops it (while it is held, the
     last scan is in doubt)."""
 
-    def __init__(self) -> None:
-        # found pose o prior^-1 (a move of the map frame) of the last scan, when its search found one
-        self.pending: Pose2D | None = None
+    # found pose o prior^-1 (a move of the map frame) of the last scan, when its search found one
+    pending: Pose2D | None = None
 
 
 def match_in_grid(  # noqa: PLR0917 - the local track and the SLAM call it alike, positionally
