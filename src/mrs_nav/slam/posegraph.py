@@ -7,10 +7,15 @@ Jacobian (a finite-difference one cost 4 s of CPU per closure on the 910-pose In
 
 Robustness to false loop closures (:func:`close_loop`): loop edges are added one at a time to a graph that is
 consistent. A true closure agrees with the rest once its drift is spread over the trajectory, so after the solve
-every edge stays within :data:`GATE` standard deviations; a false one strains some edge past it and is rejected,
-the graph kept as it was. (A robust kernel such as Cauchy's was tried first: it also discounts the true closure
-of a long drift, whose residual starts large, and least squares spreads a false one thin enough to pass a gate
-on the loop edge's own residual.)
+every edge stays within :data:`GATE` standard deviations, and the least-squares cost rises by what one more
+measurement of three values adds: chi-square with 3 degrees of freedom, when the edges' standard deviations are
+right. A false one strains some edge past the gate, or, spread thin over a long loop of loose edges, raises the
+cost by more than :data:`CHI2_GATE` (a true edge does that once in a thousand); either way it is rejected and the
+graph kept as it was. The rise is the squared Mahalanobis distance between the loop's measurement and what the
+graph without it predicts (exactly so for a linear graph), so the test weighs the mismatch by the graph's own
+uncertainty between the two poses. (A robust kernel such as Cauchy's was tried first: it also
+discounts the true closure of a long drift, whose residual starts large, and least squares spreads a false one
+thin enough to pass a gate on the loop edge's own residual.)
 """
 
 from __future__ import annotations
@@ -39,6 +44,8 @@ class Edge:
 
 GATE = 4.0  # standard deviations (norm of an edge's three scaled residuals) any edge may keep after a solve
 AGREES = 1.0  # standard deviations: a loop edge the poses satisfy this well is added without a solve
+# How much one loop edge may raise the least-squares cost: chi-square of 3 degrees of freedom at 0.999
+CHI2_GATE = 16.27
 
 
 @dataclass(frozen=True)
@@ -98,20 +105,21 @@ class _Problem:
 
 
 def optimise(poses: Sequence[Pose2D], edges: Sequence[Edge], *, max_evaluations: int = 50) -> OptimisedGraph:
-    """The poses that best satisfy ``edges`` from the initial ``poses`` (the first stays where it is) and the
-    largest normalised edge residual there."""
+    """The poses that best satisfy ``edges`` from the initial ``poses`` (the first stays where it is), the
+    largest normalised edge residual there and the cost."""
     if len(poses) < 2 or not edges:
-        return OptimisedGraph(list(poses), 0.0)
+        return OptimisedGraph(list(poses), 0.0, 0.0)
     start = np.array([[p.x, p.y, p.yaw] for p in poses], dtype=np.float64)
     flat, residuals = _solve(start[1:].ravel(), start[0], edges, max_evaluations)
     worst = float(np.linalg.norm(residuals.reshape(-1, 3), axis=1).max())
     out = flat.reshape(-1, 3)
     optimised = [poses[0], *(Pose2D(float(x), float(y), float(np.arctan2(np.sin(t), np.cos(t)))) for x, y, t in out)]
-    return OptimisedGraph(optimised, worst)
+    return OptimisedGraph(optimised, worst, float(residuals @ residuals))
 
 
 def close_loop(poses: Sequence[Pose2D], edges: Sequence[Edge], loop: Edge) -> OptimisedGraph | None:
-    """The graph optimised with ``loop`` added, or None when that leaves an edge past :data:`GATE`.
+    """The graph optimised with ``loop`` added, or None when that leaves an edge past :data:`GATE` or raises the
+    least-squares cost of the graph optimised without it by more than :data:`CHI2_GATE` (module doc).
 
     When the poses already satisfy every edge and ``loop`` within :data:`AGREES` standard deviations it is not
     solved: the solve would move poses by a fraction of the edges' spread, at the cost of a sparse
@@ -123,17 +131,21 @@ def close_loop(poses: Sequence[Pose2D], edges: Sequence[Edge], loop: Edge) -> Op
     residuals = _Problem.of(start[0], [*edges, loop]).residuals(start[1:].ravel())
     agreement = float(np.linalg.norm(residuals.reshape(-1, 3), axis=1).max())
     if agreement <= AGREES:
-        return OptimisedGraph(list(poses), agreement)
+        return OptimisedGraph(list(poses), agreement, float(residuals @ residuals))
     result = optimise(poses, [*edges, loop])
-    return result if result.worst_residual <= GATE else None
+    if result.worst_residual > GATE:
+        return None
+    return result if result.cost - optimise(poses, edges).cost <= CHI2_GATE else None
 
 
 @dataclass(frozen=True)
 class OptimisedGraph:
-    """Optimised poses and the largest normalised edge residual (standard deviations) they leave."""
+    """Optimised poses, the largest normalised edge residual (standard deviations) they leave and the sum of the
+    squared normalised residuals (the least-squares cost)."""
 
     poses: list[Pose2D]
     worst_residual: float
+    cost: float
 
 
 def _solve(

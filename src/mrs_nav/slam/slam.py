@@ -24,8 +24,9 @@ submap of the nodes taken near the closest older node that is at least :data:`LO
 node. Once the robot only drives where nodes are, the map it matches against already holds the loop. A match
 that explains at least :data:`LOOP_MIN_INLIERS` of the scan's points, pins the pose in every direction, and fits
 clearly better than the scan fits where the graph puts it (:func:`ambiguous_loop_match`) is a candidate edge; the
-graph is optimised with it and the edge kept only if every edge then agrees within the gate (else it is rejected
-as a false candidate); a closure whose poses already satisfy every edge is kept without a solve. When the
+graph is optimised with it and the edge kept only if every edge then agrees within the gate and the rise of the
+least-squares cost passes a chi-square test (:mod:`mrs_nav.slam.posegraph`; else it is rejected as a false
+candidate); a closure whose poses already satisfy every edge is kept without a solve. When the
 optimisation moved a node by more than :data:`REBUILD_AFTER_CELLS` cells from where the map has it, the map is
 rebuilt from the nodes' corrected poses; ``map -> odom`` follows the corrected latest pose.
 
@@ -77,6 +78,10 @@ LOOP_RADIUS_M = 3.0  # m: how far the older pose may be from the current estimat
 # the gate (Acapulco at 12 m: 109 of 140 matches right, their median share of explained points 0.52 against 0.25),
 # but over the 13 public logs (bench slam-sweep) 6 m broke FHW's map and 12 m did with one node per 0.25 m kept,
 # not per 0.5 m or every node: FHW's weak matches after a closure go either way, so a wider submap is not yet safe.
+# A submap by place (the 24 older nodes nearest the estimate, within 6 m) with a gate of 0.3, the search widened
+# with the travel since the last closure and weak matches held to a typical edge's cost rise took Acapulco from
+# 1.69 to 0.16 m (its doubled walls 0.0050, at the line), but Freiburg 079 and the campus fell under 20x real time
+# (a rebuild after most of the extra closures) and the campus's ATE doubled.
 LOOP_SUBMAP_M = 2.0
 LOOP_SEARCH_M = 1.0  # m, half-width of the loop match's search (the drift it can correct)
 LOOP_SEARCH_RAD = math.radians(20.0)

@@ -6,7 +6,7 @@ import math
 import pytest
 
 from mrs_nav.geometry import Pose2D
-from mrs_nav.slam.posegraph import Edge, close_loop
+from mrs_nav.slam.posegraph import CHI2_GATE, GATE, Edge, close_loop, optimise
 
 
 def square_loop():
@@ -97,3 +97,21 @@ def test_the_same_graph_solves_to_the_same_bits_wherever_its_arrays_lie():
         assert result is not None
         solved.add(tuple((p.x, p.y, p.yaw) for p in result.poses))
     assert len(solved) == 1
+
+
+def test_a_wrong_loop_edge_spread_thin_is_refused_by_the_cost_it_adds():
+    # Along a loop of loose edges (2 cm, 0.02 rad each) a loop edge 1 m off is spread so thin by the solve that
+    # every edge stays within GATE (at most 0.99 standard deviations), but it raises the least-squares cost by
+    # about 20: a true edge does that less than once in a thousand. Half a metre off raises it by about 5: kept.
+    truth = square_loop()
+    steps, poses = drifted(truth, yaw_bias=0.0)
+    edges = [Edge(k, k + 1, s, 0.02, 0.02) for k, s in enumerate(steps)]
+
+    def loop_off(metres):
+        return Edge(0, len(truth) - 1, truth[-1].relative_to(truth[0]).compose(Pose2D(metres, 0.0, 0.0)), 0.02, 0.02)
+
+    assert optimise(poses, [*edges, loop_off(1.0)]).worst_residual < GATE
+    assert close_loop(poses, edges, loop_off(1.0)) is None
+    kept = close_loop(poses, edges, loop_off(0.5))
+    assert kept is not None
+    assert kept.cost - optimise(poses, edges).cost < CHI2_GATE
