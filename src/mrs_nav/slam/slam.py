@@ -30,6 +30,15 @@ candidate); a closure whose poses already satisfy every edge is kept without a s
 optimisation moved a node by more than :data:`REBUILD_AFTER_CELLS` cells from where the map has it, the map is
 rebuilt from the nodes' corrected poses; ``map -> odom`` follows the corrected latest pose.
 
+Far loop closures: once :data:`LOOP_FAR_AFTER_M` of travel has passed without a closure, the drift can exceed what
+the near search reaches (the MIT Infinite Corridor log came back to its start 13 m off after a 719 m loop, and
+closed nothing). When the near attempt closes nothing then, the older nodes within :func:`far_radius` of the
+estimate are ranked by place signature (:mod:`mrs_nav.slam.place`: it does not depend on the drifted pose), and the
+scan is matched at the best one's position (the estimate's heading, a :data:`LOOP_FAR_SEARCH_M` window) against a
+submap of the older nodes near it by place, held to the near match's tests. The match is taken only when the next
+attempt's asks for the same correction of the estimate (:data:`LOOP_FAR_AGREES`): a look-alike place seldom fits
+twice in a row with one correction. The edge then goes through the same graph tests.
+
 Rebuilds are lazy (:meth:`Slam.rebuild_map`): the map's tiles are marked out of date and drawn again
 (:meth:`mrs_nav.slam.grid.LogOddsGrid.redraw`) only where they are read: before a scan is matched, the tiles
 within its reach plus :data:`REDRAW_MARGIN_M`, and the whole map when it is read as a whole (:attr:`Slam.grid`,
@@ -65,6 +74,7 @@ from mrs_nav.slam.matcher import (
     thin_points,
     window_field,
 )
+from mrs_nav.slam.place import Signature, differences, signature
 from mrs_nav.slam.posegraph import Edge, close_loop
 from mrs_nav.slam.scan import LaserScanData, StoredBeams, split_beams
 
@@ -85,6 +95,17 @@ LOOP_RADIUS_M = 3.0  # m: how far the older pose may be from the current estimat
 LOOP_SUBMAP_M = 2.0
 LOOP_SEARCH_M = 1.0  # m, half-width of the loop match's search (the drift it can correct)
 LOOP_SEARCH_RAD = math.radians(20.0)
+# m of travel without a closure before loops are also sought by place signature. Over the 13 public logs (bench
+# slam-sweep) 15 m gave the same Infinite Corridor and Acapulco maps and more closures elsewhere (CSAIL's ATE 0.137 ->
+# 0.151 m); sought at every attempt that had nodes this far back, the Freiburg campus fell under 20x real time.
+LOOP_FAR_AFTER_M = 30.0
+# Far loops: an older node is a candidate within LOOP_RADIUS_M plus this share of the travel since it (the Infinite
+# Corridor's 13 m after 719 m is 1.8 %)
+LOOP_FAR_DRIFT = 0.025
+LOOP_FAR_SEARCH_M = 1.5  # m, half-width of a far loop match's search round the node its signature picked
+LOOP_FAR_SUBMAP_M = 6.0  # m: a far loop's submap is of the older nodes within this of that node ...
+LOOP_FAR_SUBMAP_NODES = 24  # ... the nearest this many
+LOOP_FAR_AGREES = (0.2, math.radians(2.0))  # m, rad: two far matches in a row must ask for the same correction
 LOOP_MIN_INLIERS = 0.75  # share of scan points within 1.5 cells of the submap's walls
 LOOP_MIN_SPREAD = 0.1  # weakest-direction constraint of a loop match (see _weakest_constraint): no corridors
 # A loop match more than LOOP_DISTINCT_M from where refining the scan in place (at the graph's estimate) ends
@@ -158,6 +179,7 @@ class Slam:
         self.matcher = ScanMatcher(c.sigma, c.search_linear, c.search_angular)
         self._recoveries = Recoveries()
         self.loop_matcher = ScanMatcher(c.sigma, LOOP_SEARCH_M, LOOP_SEARCH_RAD)  # wide search, no odometry prior
+        self.far_matcher = ScanMatcher(c.sigma, LOOP_FAR_SEARCH_M, LOOP_SEARCH_RAD)
         self.nodes: list[ProcessedScan] = []  # the pose graph's nodes (keyframes), with their beams
         self.edges: list[Edge] = []
         self.last: ProcessedScan | None = None  # the latest processed scan
@@ -170,6 +192,10 @@ class Slam:
         self.clipped_in_rebuild = 0  # scans mapped clipped at the cell limit by rebuilds (rebuild_map)
         self.scans_in_doubt = 0  # scans left out while a pose found far from odometry waited (match_in_grid)
         self._last_loop_attempt = 0.0
+        self._last_closure = 0.0  # travel (m) at the last loop closure
+        # The correction of the estimate (a move of the map frame) that the last far loop match asked for
+        self._far_pending: Pose2D | None = None
+        self._signatures: dict[int, Signature | None] = {}  # place signatures of nodes, as far loops ask for them
         self._mapped: list[Pose2D] = []  # the pose each node was mapped at
         # per node: scans in its place (SCANS_KEPT_PER_NODE), as (laser pose in the node's frame, beams)
         self._kept: list[list[tuple[Pose2D, StoredBeams]]] = []
@@ -365,28 +391,89 @@ class Slam:
 
     def _try_loop(self, current: ProcessedScan, thinned: FloatArray) -> None:
         """Look for a loop closure of the latest scan (``thinned``: its end points as the matcher takes them,
-        module doc); optimise and rebuild when one holds."""
+        module doc), near where the graph puts it and, after a long drive without one, by its place signature;
+        optimise and rebuild when one holds."""
         if thinned.shape[0] < LOOP_MIN_POINTS:
             return
-        old = [r for r in self.nodes if current.travelled - r.travelled >= LOOP_MIN_TRAVEL_M]
+        old = [j for j, r in enumerate(self.nodes) if current.travelled - r.travelled >= LOOP_MIN_TRAVEL_M]
         if not old:
             return
-        nearest = min(old, key=lambda r: _apart(r.pose, current.pose))
+        if self._try_near_loop(current, thinned, old):
+            return
+        if current.travelled - self._last_closure >= LOOP_FAR_AFTER_M:
+            self._try_far_loop(current, thinned, old)
+        else:
+            self._far_pending = None
+
+    def _try_near_loop(self, current: ProcessedScan, thinned: FloatArray, old: list[int]) -> bool:
+        """A loop closure against the submap of the older node nearest the graph's estimate; whether one held."""
+        j = min(old, key=lambda i: _apart(self.nodes[i].pose, current.pose))
+        nearest = self.nodes[j]
         if _apart(nearest.pose, current.pose) > LOOP_RADIUS_M:
-            return
-        submap = [r for r in old if abs(r.travelled - nearest.travelled) <= LOOP_SUBMAP_M]
+            return False
+        submap = [self.nodes[i] for i in old if abs(self.nodes[i].travelled - nearest.travelled) <= LOOP_SUBMAP_M]
         sensor_prior = current.pose.compose(current.laser_pose)
-        matched = self._match_submap(submap, thinned, sensor_prior)
-        if matched is None:
+        match = self._verified_match(self.loop_matcher, submap, thinned, sensor_prior)
+        return match is not None and self._close(current, j, match)
+
+    def _try_far_loop(self, current: ProcessedScan, thinned: FloatArray, old: list[int]) -> None:
+        """A loop closure after a drift too large for the near search (module doc, far loop closures):
+        the older node within :func:`far_radius` of the estimate whose place signature is nearest the scan's,
+        matched by place; taken when the next attempt's match asks for the same correction of the estimate."""
+        pending, self._far_pending = self._far_pending, None
+        within = [j for j in old if _apart(self.nodes[j].pose, current.pose) <= far_radius(current, self.nodes[j])]
+        mine = signature(thinned)
+        signed = [(j, s) for j in within if (s := self._signature(j)) is not None]
+        if mine is None or not signed:
             return
+        scores = differences(mine, np.array([s for _, s in signed]))
+        j = signed[int(np.argmin(scores))][0]
+        place = self.nodes[j]
+        submap = sorted(
+            (self.nodes[i] for i in old if _apart(self.nodes[i].pose, place.pose) <= LOOP_FAR_SUBMAP_M),
+            key=lambda r: _apart(r.pose, place.pose),
+        )[:LOOP_FAR_SUBMAP_NODES]
+        estimate = current.pose.compose(current.laser_pose)
+        there = place.pose.compose(place.laser_pose)
+        prior = Pose2D(there.x, there.y, estimate.yaw)
+        match = self._verified_match(self.far_matcher, submap, thinned, prior)
+        if match is None:
+            return
+        correction = match.pose.compose(estimate.inverse())
+        if pending is None or not _agree(pending.compose(estimate), match.pose):
+            self._far_pending = correction
+            return
+        self._close(current, j, match)
+
+    def _signature(self, j: int) -> Signature | None:
+        """Node ``j``'s place signature (:mod:`mrs_nav.slam.place`), computed when first asked for."""
+        if j not in self._signatures:
+            beams = self.nodes[j].beams
+            points = thin_points(beams.split().hit_points, self.config.delta) if beams is not None else np.empty((0, 2))
+            self._signatures[j] = signature(points)
+        return self._signatures[j]
+
+    def _verified_match(
+        self, matcher: ScanMatcher, submap: list[ProcessedScan], thinned: FloatArray, prior: Pose2D
+    ) -> MatchResult | None:
+        """``matcher``'s match of the scan in the ``submap`` near the laser pose ``prior`` when it is a loop
+        candidate: it explains :data:`LOOP_MIN_INLIERS` of the points, pins the pose in every direction and fits
+        clearly better than elsewhere near ``prior`` (:func:`ambiguous_loop_match`); else None."""
+        matched = self._match_submap(matcher, submap, thinned, prior)
+        if matched is None:
+            return None
         match, field = matched
         if (
             match.inlier_fraction < LOOP_MIN_INLIERS
             or _weakest_constraint(field, thinned, match.pose) < LOOP_MIN_SPREAD
-            or ambiguous_loop_match(self.loop_matcher, field, thinned, match, sensor_prior)
+            or ambiguous_loop_match(matcher, field, thinned, match, prior)
         ):
-            return
-        j = self.nodes.index(nearest)
+            return None
+        return match
+
+    def _close(self, current: ProcessedScan, j: int, match: MatchResult) -> bool:
+        """Add the loop edge from node ``j`` to ``current`` at the laser pose ``match`` found for it, if the
+        graph optimised with it holds (:func:`mrs_nav.slam.posegraph.close_loop`); whether it did."""
         is_node = self.nodes[-1] is current
         k = len(self.nodes) - 1 if is_node else len(self.nodes)
         poses = [r.pose for r in self.nodes] + ([] if is_node else [current.pose])
@@ -394,11 +481,11 @@ class Slam:
         if not is_node:
             edges = [*edges, self._sequential(current)]
         found = match.pose.compose(current.laser_pose.inverse())
-        edge = Edge(j, k, found.relative_to(nearest.pose), *LOOP_SIGMA)
+        edge = Edge(j, k, found.relative_to(self.nodes[j].pose), *LOOP_SIGMA)
         closed = close_loop(poses, edges, edge)
         if closed is None:
             self.loops_rejected += 1
-            return
+            return False
         if not is_node:
             # The scan that closes the loop becomes a node: it is the loop edge's end.
             self.edges.append(edges[-1])
@@ -410,6 +497,8 @@ class Slam:
         self.loops_closed += 1
         self.loops_solved += closed.poses != poses
         self._last_loop_attempt = current.travelled + LOOP_AFTER_CLOSURE_M - LOOP_EVERY_M
+        self._last_closure = current.travelled
+        self._far_pending = None
         self.edges.append(edge)
         self.nodes = [dataclasses.replace(r, pose=p) for r, p in zip(self.nodes, closed.poses, strict=True)]
         self.last = self.nodes[-1]
@@ -417,6 +506,7 @@ class Slam:
         # Smaller corrections are within a cell of the map; rebuilding costs a pass over every node.
         if self.map_lag() > REBUILD_AFTER_CELLS * self.config.delta:
             self.rebuild_map()
+        return True
 
     def map_lag(self) -> float:
         """How far (m) the poses the map was built from are, at most, from the current estimates."""
@@ -432,9 +522,10 @@ class Slam:
         self._redraw(None)
 
     def _match_submap(
-        self, submap: list[ProcessedScan], points: FloatArray, prior: Pose2D
+        self, matcher: ScanMatcher, submap: list[ProcessedScan], points: FloatArray, prior: Pose2D
     ) -> tuple[MatchResult, DistanceField] | None:
-        """The scan ``points`` matched against a grid of the ``submap`` scans only, without an odometry prior."""
+        """The scan ``points`` matched by ``matcher`` against a grid of the ``submap`` scans only, without an
+        odometry prior."""
         c = self.config
         grid = LogOddsGrid(
             c.delta, (prior.x - 1.0, prior.y - 1.0, prior.x + 1.0, prior.y + 1.0), max_cells=MAX_MAP_CELLS
@@ -442,10 +533,10 @@ class Slam:
         for record in submap:
             if record.beams is not None:
                 grid.integrate(record.pose.compose(record.laser_pose), record.beams.split())
-        field = window_field(grid, points, prior, LOOP_SEARCH_M)
+        field = window_field(grid, points, prior, matcher.search_linear)
         if field.empty:
             return None
-        return self.loop_matcher.match(field, points, prior, (1e3, 1e3)), field
+        return matcher.match(field, points, prior, (1e3, 1e3)), field
 
     def rebuild_map(self) -> None:
         """Map every node's scan, and the scans kept with it, again at its (corrected) pose, into a cleared map.
@@ -558,6 +649,18 @@ def ambiguous_loop_match(
     if _apart(match.pose, local) <= LOOP_DISTINCT_M:
         return False
     return LOOP_AMBIGUITY * match.score <= matcher.evaluate(field, points, local).score
+
+
+def far_radius(current: ProcessedScan, older: ProcessedScan) -> float:
+    """How far (m) from the estimate of ``current`` the estimate of an ``older`` node may have drifted:
+    :data:`LOOP_RADIUS_M` plus :data:`LOOP_FAR_DRIFT` of the travel between them."""
+    return LOOP_RADIUS_M + LOOP_FAR_DRIFT * (current.travelled - older.travelled)
+
+
+def _agree(a: Pose2D, b: Pose2D) -> bool:
+    """Whether two poses agree within :data:`LOOP_FAR_AGREES`."""
+    linear, angular = LOOP_FAR_AGREES
+    return _apart(a, b) <= linear and abs(math.remainder(a.yaw - b.yaw, math.tau)) <= angular
 
 
 def _farthest(beams: StoredBeams) -> float:
