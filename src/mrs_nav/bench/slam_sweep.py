@@ -26,7 +26,7 @@ from mrs_nav.limits import MAX_RUNS
 from mrs_nav.options import runs_option
 from mrs_nav.replay.batch import BagJob, BagOutcome, run_jobs
 from mrs_nav.slam.config import SlamConfig
-from mrs_nav.slam.consistency import BROKEN_FRACTION
+from mrs_nav.slam.consistency import BROKEN_FRACTION, DUPLICATED_LINE, is_broken
 from mrs_nav.tables import markdown_table
 
 # Corrected logs hold only the scans their SLAM selected: process every one (as `bench slam` does).
@@ -129,6 +129,7 @@ def run(args: argparse.Namespace) -> str:
         "end points on free cells",
         "on doubled walls",
         "same, at the corrected poses",
+        "places mapped twice",
         "map",
         "CPU ms/scan median",
         "x real time (CPU)",
@@ -143,7 +144,9 @@ def run(args: argparse.Namespace) -> str:
         f"'broken' = more than {BROKEN_FRACTION} of the scan end points on doubled walls: pieces of a metre or more "
         "on free cells away from the map's walls (moving people leave shorter ones); the same figure for the map "
         "the scans make at the log's corrected poses says how much of it the scene draws (things that stood on "
-        "one pass and were gone on the next, such as a parked car); '-' where a bag has no ground truth.\n\n"
+        "one pass and were gone on the next, such as a parked car); or more than "
+        f"{DUPLICATED_LINE} of the nodes checked found by place elsewhere in the map, twice in a row (places "
+        "mapped twice, the second copy where the first never reached); '-' where a bag has no ground truth.\n\n"
         + markdown_table(header, rows)
         + "\n"
     )
@@ -152,9 +155,10 @@ def run(args: argparse.Namespace) -> str:
 def _row(job: BagJob, outcome: BagOutcome, fixed: int) -> list[object]:
     swept = " ".join(job.params[fixed:])
     if outcome.error is not None:
-        return [job.name, swept, "-", "-", "-", "-", "-", "-", f"error: {outcome.error}", "-", "-", "-"]
+        return [job.name, swept, "-", "-", "-", "-", "-", "-", "-", f"error: {outcome.error}", "-", "-", "-"]
     summary = outcome.summary
     doubled, at_truth = summary["doubled_wall_fraction"], summary["doubled_wall_fraction_at_truth"]
+    duplicated = summary["duplicated_place_fraction"]
     return [
         job.name,
         swept,
@@ -164,7 +168,8 @@ def _row(job: BagJob, outcome: BagOutcome, fixed: int) -> list[object]:
         summary["free_endpoint_fraction"],
         doubled,
         at_truth if at_truth is not None else "-",
-        "broken" if doubled > BROKEN_FRACTION else "ok",
+        duplicated,
+        "broken" if is_broken(doubled, duplicated) else "ok",
         summary["ms_per_scan_median"],
         summary["realtime_factor"],
         outcome.peak_rss_mb if outcome.peak_rss_mb is not None else "-",

@@ -25,7 +25,7 @@ from mrs_nav.replay.batch import (
 )
 from mrs_nav.replay.golden import dump_json, make_golden
 from mrs_nav.replay.job_options import add_options, golden_job, job_from_args
-from mrs_nav.slam.consistency import BROKEN_FRACTION
+from mrs_nav.slam.consistency import BROKEN_FRACTION, DUPLICATED_LINE
 from mrs_nav.slam.relations import load_relations
 from mrs_nav.textfiles import check_writable
 
@@ -143,11 +143,21 @@ def run(args: argparse.Namespace) -> int:
             if at_truth is not None and at_truth > BROKEN_FRACTION
             else ""
         )
+        doubled, duplicated = summary["doubled_wall_fraction"], summary["duplicated_place_fraction"]
+        why = []
+        if doubled > BROKEN_FRACTION:
+            why.append(
+                f"{doubled:.4f} of the scan end points draw walls of a metre or more where the final map has free "
+                f"space, past the line of {BROKEN_FRACTION}{scene}"
+            )
+        if duplicated > DUPLICATED_LINE:
+            why.append(
+                f"{duplicated:.4f} of the places checked are in the map twice (found by place elsewhere, twice in a "
+                f"row), past the line of {DUPLICATED_LINE}"
+            )
         print(
-            f"WARNING: bag {bag}: the SLAM map is likely broken (doubled or turned walls): "
-            f"{summary['doubled_wall_fraction']:.4f} of the scan end points draw walls of a metre or more where the "
-            f"final map has free space, past the line of {BROKEN_FRACTION}; its figures describe a map that does "
-            f"not hold{scene}",
+            f"WARNING: bag {bag}: the SLAM map is likely broken (doubled, turned or repeated walls): "
+            f"{'; '.join(why)}; its figures describe a map that does not hold",
             file=sys.stderr,
         )
     if relations is not None:

@@ -31,7 +31,12 @@ from mrs_nav.maps.map_io import save_map
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.replay.pose_track import PoseTrack
 from mrs_nav.slam.config import MAX_COORDINATE_M, SlamConfig
-from mrs_nav.slam.consistency import BROKEN_FRACTION, doubled_wall_fraction, free_endpoint_fraction
+from mrs_nav.slam.consistency import (
+    doubled_wall_fraction,
+    duplicated_place_fraction,
+    free_endpoint_fraction,
+    is_broken,
+)
 from mrs_nav.slam.metrics import TrajectoryErrors, align_se2, trajectory_errors
 from mrs_nav.slam.relations import Relation, relation_errors
 from mrs_nav.slam.scan import BeamSplit, split_beams
@@ -119,9 +124,11 @@ class SlamReplay:
             "loops_rejected": self.slam.loops_rejected,
             "loops_solved": self.slam.loops_solved,
             "free_endpoint_fraction": free_endpoint_fraction(self.slam),
-            # The broken-map line is on the doubled walls: the free end points also count moving people.
+            # The broken-map lines are on the doubled walls and the places mapped twice: the free end points also
+            # count moving people.
             "doubled_wall_fraction": (doubled := doubled_wall_fraction(self.slam)),
-            "map_broken": doubled > BROKEN_FRACTION,
+            "duplicated_place_fraction": (duplicated := duplicated_place_fraction(self.slam)),
+            "map_broken": is_broken(doubled, duplicated),
             "ms_per_scan_median": float(np.median(ms)),
             "ms_per_scan_p95": float(np.percentile(ms, 95)),
             # CPU time, not wall time: on a shared machine the wall clock measures the neighbours.

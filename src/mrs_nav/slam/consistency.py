@@ -21,6 +21,14 @@ and 0.013-0.13 for the maps tens of metres off; Seattle's map
 built on a scan placed at the wrong heading (ATE 2.8 m, raw figure 0.018) read 0.008. :data:`BROKEN_FRACTION`
 is the line ``mrs-nav replay`` warns at and ``mrs-nav bench slam`` fails at.
 
+:func:`duplicated_place_fraction` sees what end points on free cells cannot: a place mapped twice where the
+second copy lies in space the first never saw (a room re-entered after a drift, drawn again beside itself, turned;
+a corridor bent where its loop did not close). Every :data:`DUPLICATE_EVERY_M` of travel a node's scan is looked
+for by place signature among the nodes at least :data:`DUPLICATE_APART_M` of travel from it and matched there as a
+far loop closure is (:meth:`mrs_nav.slam.slam.Slam.match_at_node`); where it fits, twice in a row with the same
+correction, more than :data:`DUPLICATE_OFF` from where the map has it, the place is in the map twice. The share of
+checked nodes so is held to :data:`DUPLICATED_LINE`.
+
 :func:`revisit_spread` is a finer figure for comparing trajectories of the same scans (this SLAM's against a
 reference's): how closely end points of scans taken far apart in time agree; :func:`revisit_spread_by_distance`
 splits it by how far apart the scans were taken, which is where a global deformation of one trajectory shows.
@@ -40,8 +48,9 @@ from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.slam.config import SlamConfig
 from mrs_nav.slam.grid import LogOddsGrid
 from mrs_nav.slam.matcher import thin_points
+from mrs_nav.slam.place import differences
 from mrs_nav.slam.scan import BeamSplit
-from mrs_nav.slam.slam import Slam, new_map
+from mrs_nav.slam.slam import LOOP_MIN_POINTS, Slam, far_matches_agree, new_map
 
 # Of the end points on doubled walls (doubled_wall_fraction): 3.5x the most any map that holds reached on 13 public
 # logs (0.0014), below the least broken one (Orebro's, 0.011, before the matcher's wider search for weak matches).
@@ -52,6 +61,12 @@ BROKEN_FRACTION = 0.005
 WALL_TOLERANCE_M = 0.15
 WALL_PIECE_M = 1.0  # m: a piece of stray end points at least this long is a wall, not a person
 WALL_GAP_M = 0.5  # m: consecutive end points of a scan farther apart are not one piece
+DUPLICATE_EVERY_M = 2.0  # m of travel between the nodes duplicated_place_fraction checks
+DUPLICATE_APART_M = 8.0  # m of travel at least between a node and the nodes it is looked for among
+DUPLICATE_OFF = (0.5, math.radians(3.0))  # m, rad: a place found farther than this from the map's pose is doubled
+# Of the checked nodes found elsewhere (duplicated_place_fraction): on 13 public logs the maps that hold read 0 but
+# the MIT Infinite Corridor (0.0034: a look-alike stretch of corridor); maps with a loop left open 0.045-0.061.
+DUPLICATED_LINE = 0.02
 REVISIT_GAP = 60  # scans apart: what a scan's own neighbours in time see is not a revisit
 REVISIT_REACH_M = 0.3  # m: farther apart, two end points are not the same wall
 REVISIT_CELL_M = 0.05  # m: one end point per cell of this size per scan
@@ -79,6 +94,50 @@ def doubled_wall_fraction(slam: Slam) -> float:
     of consecutive end points of one scan, each within :data:`WALL_GAP_M` of the one before, measured from the
     first to the last. Moving people leave shorter pieces, doubled or turned walls do not."""
     return _doubled_fraction(slam.grid, _placed_hits(slam))
+
+
+def is_broken(doubled: float, duplicated: float) -> bool:
+    """Whether a map with these figures (:func:`doubled_wall_fraction`, :func:`duplicated_place_fraction`) is
+    likely broken: either past its line."""
+    return doubled > BROKEN_FRACTION or duplicated > DUPLICATED_LINE
+
+
+def duplicated_place_fraction(slam: Slam) -> float:
+    """The share of the nodes checked whose place the map holds twice (module doc), at the final poses; 0 without
+    nodes to check."""
+    nodes = slam.nodes
+    signed = [j for j in range(len(nodes)) if slam.signature_of(j) is not None]
+    if not signed:
+        return 0.0
+    travel = np.array([nodes[j].travelled for j in signed])
+    signatures = np.array([slam.signature_of(j) for j in signed])
+    checked = duplicated = 0
+    last = -math.inf
+    pending: Pose2D | None = None
+    for k, i in enumerate(signed):
+        record = nodes[i]
+        if record.travelled - last < DUPLICATE_EVERY_M or record.beams is None:
+            continue
+        points = thin_points(record.beams.split().hit_points, slam.config.delta)
+        if points.shape[0] < LOOP_MIN_POINTS:
+            continue
+        last = record.travelled
+        checked += 1
+        apart = np.flatnonzero(np.abs(travel - record.travelled) >= DUPLICATE_APART_M)
+        estimate = record.pose.compose(record.laser_pose)
+        match = None
+        if apart.size:
+            j = signed[int(apart[np.argmin(differences(signatures[k], signatures[apart]))])]
+            match = slam.match_at_node(j, [signed[a] for a in apart], points, estimate.yaw)
+        if match is None:
+            pending = None
+            continue
+        confirmed = pending is not None and far_matches_agree(pending.compose(estimate), match.pose)
+        pending = match.pose.compose(estimate.inverse())
+        off = math.hypot(match.pose.x - estimate.x, match.pose.y - estimate.y)
+        turn = abs(math.remainder(match.pose.yaw - estimate.yaw, math.tau))
+        duplicated += confirmed and (off > DUPLICATE_OFF[0] or turn > DUPLICATE_OFF[1])
+    return duplicated / checked if checked else 0.0
 
 
 def doubled_wall_fraction_at(config: SlamConfig, scans: Callable[[], Iterator[tuple[Pose2D, BeamSplit]]]) -> float:

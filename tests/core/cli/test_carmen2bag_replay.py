@@ -49,6 +49,7 @@ def test_carmen2bag_then_replay(excerpt, tmp_path, capsys):
         "loops_solved",
         "free_endpoint_fraction",
         "doubled_wall_fraction",
+        "duplicated_place_fraction",
         "map_broken",
         "ms_per_scan_median",
         "ms_per_scan_p95",

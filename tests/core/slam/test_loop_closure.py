@@ -13,12 +13,18 @@ import pytest
 from mrs_nav.geometry import Pose2D
 from mrs_nav.slam import Slam, SlamConfig
 from mrs_nav.slam import slam as slam_module
-from mrs_nav.slam.consistency import BROKEN_FRACTION, doubled_wall_fraction, free_endpoint_fraction
+from mrs_nav.slam.consistency import (
+    BROKEN_FRACTION,
+    DUPLICATED_LINE,
+    doubled_wall_fraction,
+    duplicated_place_fraction,
+    free_endpoint_fraction,
+)
 from mrs_nav.slam.grid import LogOddsGrid
 from mrs_nav.slam.matcher import DistanceField, ScanMatcher, thin_points, window_field
 from mrs_nav.slam.scan import BeamSplit, split_beams
 from mrs_nav.slam.slam import LOOP_SEARCH_M, LOOP_SEARCH_RAD, REDRAW_MARGIN_M, ambiguous_loop_match
-from tests.core.slam.synthetic import ROOM, cast
+from tests.core.slam.synthetic import ROOM, ROOM_WITH_DOOR, cast, far_drive
 
 
 def rect(x0, y0, x1, y1):
@@ -189,45 +195,8 @@ def test_a_map_rebuilt_lazily_is_the_map_rebuilt_at_once(monkeypatch, margin):
         np.testing.assert_array_equal(lazy, eager)
 
 
-# A room (x -8..0, y -3..3) with a 2 m doorway in its east wall, a pillar and two stubs; outside it nothing is in the
-# laser's 3.5 m: there the SLAM has only odometry, which over-reports every turn by 8 % (wheels slipping as they
-# turn). The robot leaves the room, drives 21 m out, turns round and comes back: 14 degrees and 4 m off.
-ROOM_WITH_DOOR = np.array(
-    [
-        [-8, -3, 0, -3],
-        [0, -3, 0, -1],
-        [0, 1, 0, 3],
-        [0, 3, -8, 3],
-        [-8, 3, -8, -3],
-        *rect(-5, -1, -4.6, -0.6),
-        [-2, 3, -2, 2],
-        [-7, -3, -6, -2],
-    ],
-    dtype=np.float64,
-)
-
-
-def route(corners: list[tuple[float, float]], step: float = 0.25) -> list[Pose2D]:
-    """Poses every ``step`` m along the polyline ``corners``, turning on the spot 0.25 rad a pose at each."""
-    poses = [Pose2D(*corners[0], 0.0)]
-    for (x0, y0), (x1, y1) in itertools.pairwise(corners):
-        heading = math.atan2(y1 - y0, x1 - x0)
-        while abs(math.remainder(poses[-1].yaw - heading, math.tau)) > 1e-9:
-            turn = math.remainder(heading - poses[-1].yaw, math.tau)
-            poses.append(Pose2D(poses[-1].x, poses[-1].y, poses[-1].yaw + math.copysign(min(0.25, abs(turn)), turn)))
-        n = round(math.hypot(x1 - x0, y1 - y0) / step)
-        poses += [Pose2D(x0 + (x1 - x0) * i / n, y0 + (y1 - y0) * i / n, heading) for i in range(1, n + 1)]
-    return poses
-
-
 def run_far_drive() -> tuple[Slam, list[Pose2D]]:
-    corners = [(-6.5, 1.0), (-1.5, -1.5), (-1.5, 1.5), (-1, 0), (20, 0), (20, 0.5), (-1, 0.5), (-3, 1.5)]
-    truth = route([*corners, (-6.5, -1.5), (-6.5, 1.5), (-3.5, 1.5), (-3.5, -1.5)])
-    odom = [truth[0]]
-    for a, b in itertools.pairwise(truth):
-        step = b.relative_to(a)
-        outside = max(a.x, b.x) > 3.5
-        odom.append(odom[-1].compose(Pose2D(step.x, step.y, step.yaw * (1.08 if outside else 1.0))))
+    truth, odom = far_drive()
     slam = Slam(SlamConfig(linearUpdate=0.0, angularUpdate=0.0, loop_closure=True))
     for i, (gt, od) in enumerate(zip(truth, odom, strict=True)):
         slam.add_scan(od, cast(gt, walls=ROOM_WITH_DOOR), float(i))
@@ -254,12 +223,17 @@ def test_a_loop_after_a_drift_beyond_the_near_search_is_closed_by_place(monkeypa
     assert max(errors(slam, truth, last=80)) < 0.05  # the room's second visit, after the closure
     assert max(errors(slam, truth)) < 0.6  # the drive outside, where nothing but odometry was seen
     assert free_endpoint_fraction(slam) < 0.01  # one room
+    assert duplicated_place_fraction(slam) == 0.0
 
     # Without the search by place the loop stays open, and the room is mapped twice.
     monkeypatch.setattr(slam_module, "LOOP_FAR_AFTER_M", math.inf)
     open_slam, _ = run_far_drive()
     assert min(errors(open_slam, truth, last=80)) > 3.0
     assert free_endpoint_fraction(open_slam) > 0.05
+    # The second room lies where the first never reached: few of its end points land on the first's free cells,
+    # in pieces shorter than a wall; its scans fit the first room, so the map holds the place twice.
+    assert doubled_wall_fraction(open_slam) <= BROKEN_FRACTION
+    assert duplicated_place_fraction(open_slam) > DUPLICATED_LINE
 
 
 def test_a_far_loop_match_is_taken_only_when_the_next_one_asks_for_the_same_correction(monkeypatch):
