@@ -28,6 +28,13 @@ def wrap_angle(angle: float) -> float:
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
+def poses_agree(a: Pose2D, b: Pose2D, tolerance: tuple[float, float]) -> bool:
+    """Whether two poses' positions are within ``tolerance[0]`` (m) and their headings within ``tolerance[1]``
+    (rad) of each other."""
+    linear, angular = tolerance
+    return math.hypot(a.x - b.x, a.y - b.y) <= linear and abs(wrap_angle(a.yaw - b.yaw)) <= angular
+
+
 def wrap_angles(angles: FloatArray) -> FloatArray:
     """Vectorised :func:`wrap_angle`."""
     return np.asarray((angles + np.pi) % (2.0 * np.pi) - np.pi, dtype=np.float64)

@@ -44,13 +44,13 @@ import numpy.typing as npt
 from scipy.spatial import cKDTree
 
 from mrs_nav.errors import InvalidInputError
-from mrs_nav.geometry import FloatArray, Pose2D
+from mrs_nav.geometry import FloatArray, Pose2D, poses_agree
 from mrs_nav.slam.config import SlamConfig
 from mrs_nav.slam.grid import LogOddsGrid
 from mrs_nav.slam.matcher import thin_points
 from mrs_nav.slam.place import differences
 from mrs_nav.slam.scan import BeamSplit
-from mrs_nav.slam.slam import LOOP_MIN_POINTS, Slam, far_matches_agree, new_map
+from mrs_nav.slam.slam import LOOP_FAR_AGREES, LOOP_MIN_POINTS, Slam, new_map
 
 # Of the end points on doubled walls (doubled_wall_fraction): 3.5x the most any map that holds reached on 13 public
 # logs (0.0014), below the least broken one (Orebro's, 0.011, before the matcher's wider search for weak matches).
@@ -132,11 +132,9 @@ def duplicated_place_fraction(slam: Slam) -> float:
         if match is None:
             pending = None
             continue
-        confirmed = pending is not None and far_matches_agree(pending.compose(estimate), match.pose)
+        confirmed = pending is not None and poses_agree(pending.compose(estimate), match.pose, LOOP_FAR_AGREES)
         pending = match.pose.compose(estimate.inverse())
-        off = math.hypot(match.pose.x - estimate.x, match.pose.y - estimate.y)
-        turn = abs(math.remainder(match.pose.yaw - estimate.yaw, math.tau))
-        duplicated += confirmed and (off > DUPLICATE_OFF[0] or turn > DUPLICATE_OFF[1])
+        duplicated += confirmed and not poses_agree(match.pose, estimate, DUPLICATE_OFF)
     return duplicated / checked if checked else 0.0
 
 

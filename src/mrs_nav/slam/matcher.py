@@ -27,7 +27,7 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-from mrs_nav.geometry import FloatArray, Pose2D, wrap_angle
+from mrs_nav.geometry import FloatArray, Pose2D, poses_agree, wrap_angle
 from mrs_nav.slam.grid import (
     GRID_ARRAYS_TYPE,
     TILE,
@@ -269,16 +269,12 @@ def match_in_grid(  # noqa: PLR0917 - the local track and the SLAM call it alike
     found = wide.match(field, points, prior, (1e3, 1e3))
     if found.inlier_fraction < max(RECOVERED_INLIERS, 2.0 * match.inlier_fraction):
         return match
-    if recoveries is None or (correction is not None and _near(correction.compose(prior), found.pose)):
+    if recoveries is None or (
+        correction is not None and poses_agree(correction.compose(prior), found.pose, RECOVERY_AGREES)
+    ):
         return found
     recoveries.pending = found.pose.compose(prior.inverse())
     return match
-
-
-def _near(a: Pose2D, b: Pose2D) -> bool:
-    """Whether two poses agree within :data:`RECOVERY_AGREES`."""
-    linear, angular = RECOVERY_AGREES
-    return math.hypot(a.x - b.x, a.y - b.y) <= linear and abs(wrap_angle(a.yaw - b.yaw)) <= angular
 
 
 class ScanMatcher:

@@ -60,7 +60,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mrs_nav.errors import InvalidInputError
-from mrs_nav.geometry import FloatArray, Pose2D
+from mrs_nav.geometry import FloatArray, Pose2D, poses_agree
 from mrs_nav.slam.config import MAX_COORDINATE_M, MAX_MAP_CELLS, SlamConfig
 from mrs_nav.slam.grid import LogOddsGrid
 from mrs_nav.slam.local_track import LocalTrack
@@ -436,7 +436,7 @@ class Slam:
         if match is None:
             return
         correction = match.pose.compose(estimate.inverse())
-        if pending is None or not far_matches_agree(pending.compose(estimate), match.pose):
+        if pending is None or not poses_agree(pending.compose(estimate), match.pose, LOOP_FAR_AGREES):
             self._far_pending = correction
             return
         self._close(current, j, match)
@@ -664,12 +664,6 @@ def far_radius(current: ProcessedScan, older: ProcessedScan) -> float:
     """How far (m) from the estimate of ``current`` the estimate of an ``older`` node may have drifted:
     :data:`LOOP_RADIUS_M` plus :data:`LOOP_FAR_DRIFT` of the travel between them."""
     return LOOP_RADIUS_M + LOOP_FAR_DRIFT * (current.travelled - older.travelled)
-
-
-def far_matches_agree(a: Pose2D, b: Pose2D) -> bool:
-    """Whether two poses agree within :data:`LOOP_FAR_AGREES`."""
-    linear, angular = LOOP_FAR_AGREES
-    return _apart(a, b) <= linear and abs(math.remainder(a.yaw - b.yaw, math.tau)) <= angular
 
 
 def _farthest(beams: StoredBeams) -> float:
