@@ -46,6 +46,9 @@ class LocalTrack:
         self.matcher = matcher
         self.pose: Pose2D | None = None  # the latest base pose, in the track's own frame
         self.travelled = 0.0
+        # Summed variances (m^2, rad^2) of the steps taken on odometry alone (no scan to match, the prediction's
+        # spread): such a step is as uncertain as odometry, not as a match (Slam._sequential)
+        self.blind_variance = (0.0, 0.0)
         self._odom: Pose2D | None = None
         self._submaps: list[_Submap] = []
 
@@ -69,6 +72,9 @@ class LocalTrack:
                 prior = pose.compose(mount)
                 match = match_in_grid(self.matcher, self._submaps[0].grid, points, prior, spread)
                 pose = match.pose.compose(mount.inverse())
+            else:
+                xy, yaw = self.blind_variance
+                self.blind_variance = (xy + spread[0] ** 2, yaw + spread[1] ** 2)
         travelled = (
             self.travelled
             if self.pose is None

@@ -221,7 +221,9 @@ def test_a_loop_after_a_drift_beyond_the_near_search_is_closed_by_place(monkeypa
         assert math.hypot(edge.measured.x - true.x, edge.measured.y - true.y) < 0.05, edge
         assert abs(math.remainder(edge.measured.yaw - true.yaw, math.tau)) < math.radians(1.0), edge
     assert max(errors(slam, truth, last=80)) < 0.05  # the room's second visit, after the closure
-    assert max(errors(slam, truth)) < 0.6  # the drive outside, where nothing but odometry was seen
+    # The drive outside, where nothing but odometry was seen: its steps carry odometry's spread, so the correction
+    # goes there (with a matched step's spread instead, up to 0.47 m off, and the room's second visit 14 mm)
+    assert max(errors(slam, truth)) < 0.3
     assert free_endpoint_fraction(slam) < 0.01  # one room
     assert duplicated_place_fraction(slam) == 0.0
 
