@@ -7,6 +7,11 @@ process hangs for ever; roslaunch then leaves it behind as an orphan. Here the h
 that calls ``signal_shutdown``: it waits for the lock like any other thread, and the main loop sees
 ``rospy.is_shutdown()`` on its next turn.
 
+Before that handler is in place, while ``rospy.init_node`` walks the package path and waits for the master
+(seconds on a loaded machine, for ever without a master), a Ctrl-C ends the process as the signal's default
+action does, without the ``KeyboardInterrupt`` traceback Python's handler would leave in the launch log: there is
+nothing to shut down yet.
+
 Private parameters given on the command line (``_seed:=7``) reach the parameter server through XML-RPC, whose
 integers are 32-bit: rospy raises ``OverflowError`` from deep inside ``init_node`` for a larger one, and
 ``ROSInitException`` for text YAML cannot read. Both end the node with one line naming the parameter instead.
@@ -50,6 +55,7 @@ def _check_command_line_params(argv: list[str]) -> None:
 def init_node(name: str, **kwargs: object) -> None:
     """``rospy.init_node`` with SIGINT and SIGTERM handled off the main thread, after checking the command line's
     private parameters (see the module docstring)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
     _check_command_line_params(sys.argv)
     rospy.init_node(name, disable_signals=True, **kwargs)  # type: ignore[arg-type]
     signal.signal(signal.SIGINT, _shutdown_in_thread)
