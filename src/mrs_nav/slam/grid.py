@@ -20,6 +20,9 @@ grows), so compiled kernels index them directly: with ``(gy, gx) = (iy + shift_y
 ``(iy, ix)`` is at ``pool[table[gy // TILE, gx // TILE], gy % TILE, gx % TILE]``, and a cell of no tile is unknown
 (log-odds 0, no hits). The shift (less than a tile) lets the grid grow by whole cells as before tiling, so its
 origin, and every coordinate computed from it, stays what it was: the same scans give the same map and poses.
+Every tile holding a cell of log-odds above 0 (an occupied cell) has hit sums and counts: only end points raise
+a cell's log-odds, and :meth:`LogOddsGrid.assign` gives such tiles hit tiles too, of zero sums if need be (read as
+no hits). So a search for occupied cells reads only the tiles that have hit tiles (mrs_nav.slam.matcher).
 
 Redrawing after a loop closure is lazy (:meth:`LogOddsGrid.invalidate`, :meth:`LogOddsGrid.redraw`): every
 tile is marked out of date, and the tiles of a region are drawn again from the rebuild's scans only when a reader
@@ -373,6 +376,7 @@ class LogOddsGrid:
         shape = (self.table.shape[0], TILE, self.table.shape[1], TILE)
         rows = slice(self.shift_y, self.shift_y + self.height)
         cols = slice(self.shift_x, self.shift_x + self.width)
+        occupied = None  # tiles of log-odds above 0: they take hit tiles too (module docstring), zero sums or not
         for table, pools, index in (
             (self.table, [logodds], 0),
             (self.hit_table, [hit_x, hit_y, hit_count], 1),
@@ -382,7 +386,12 @@ class LogOddsGrid:
                 covering = np.zeros((shape[0] * TILE, shape[2] * TILE), dtype=np.float32)  # the tables' cells
                 covering[rows, cols] = array
                 tiles.append(covering.reshape(shape).transpose(0, 2, 1, 3))
-            ty, tx = np.nonzero(np.any([t.any(axis=(2, 3)) for t in tiles], axis=0))
+            taken = np.any([t.any(axis=(2, 3)) for t in tiles], axis=0)
+            if occupied is None:
+                occupied = (tiles[0] > 0.0).any(axis=(2, 3))
+            else:
+                taken |= occupied
+            ty, tx = np.nonzero(taken)
             table[ty, tx] = np.arange(ty.size, dtype=np.int32)
             self.tiles[index] = ty.size
             if index == 0:

@@ -107,7 +107,7 @@ class DistanceField:
         self.near_iy: CellArray
         self.near_ix: CellArray
         # The window only: the whole map's occupied() would cost O(map) per scan.
-        tiled = (grid.table, grid.logodds, grid.cells)
+        tiled = (grid.table, grid.logodds, grid.hit_table, grid.cells)
         window = ((y0, max(y1, y0)), (x0, max(x1, x0)))
         self.squared, self.near_iy, self.near_ix, occupied = _truncated_field(*tiled, *window, pad, cap)
         self.empty = occupied == 0
@@ -600,14 +600,20 @@ def _search_scores(  # noqa: PLR0917 - numba kernels take positional arguments
     return out
 
 
+# A cell's 8 neighbours (rows, columns), in row-major order: the first four come before it, the last four after it
+_NEIGHBOURS = np.array([(-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)], dtype=np.int64)
+
+
 @numba.njit(  # type: ignore[misc]
     "Tuple((int32[:, ::1], int32[:, ::1], int32[:, ::1], int64))("
-    "int32[:, ::1], float32[:, :, ::1], UniTuple(int64, 4), UniTuple(int64, 2), UniTuple(int64, 2), int64, int64)",
+    "int32[:, ::1], float32[:, :, ::1], int32[:, ::1], UniTuple(int64, 4), UniTuple(int64, 2), UniTuple(int64, 2), "
+    "int64, int64)",
     cache=True,
 )
 def _truncated_field(  # noqa: PLR0917 - numba kernels take positional arguments
     table: TileTable,
     logodds: Float32Array,
+    hit_table: TileTable,
     cells: GridCells,
     rows: tuple[int, int],
     cols: tuple[int, int],
@@ -615,9 +621,10 @@ def _truncated_field(  # noqa: PLR0917 - numba kernels take positional arguments
     cap: int,
 ) -> tuple[CellArray, CellArray, CellArray, int]:
     """DistanceField's arrays for the window ``[y0, y1) x [x0, x1)`` (``rows``, ``cols``; inside the grid) of a
-    grid's log-odds tiles (``table``, ``logodds``, ``cells``: LogOddsGrid.kernel_args): the squared distance in cells
-    to the nearest occupied cell (log-odds above 0), at most ``cap``, and that cell's grid indices (-1 where none
-    is nearer than the cap), padded by ``pad`` cells of ``cap`` and -1; and how many cells are occupied.
+    grid's log-odds tiles (``table``, ``logodds``, ``hit_table``, ``cells``: as in LogOddsGrid.kernel_args): the
+    squared distance in cells to the nearest occupied cell (log-odds above 0), at most ``cap``, and that cell's grid
+    indices (-1 where none is nearer than the cap), padded by ``pad`` cells of ``cap`` and -1; and how many cells
+    are occupied.
 
     Each occupied cell writes its distance into the disc of cells it can be nearest to (squared distance below
     ``cap``). Why not a Euclidean distance transform: only the truncated distances matter, walls are a few per
@@ -625,6 +632,14 @@ def _truncated_field(  # noqa: PLR0917 - numba kernels take positional arguments
     on the Intel log's windows, for the same capped distances. Of equally near cells the first in row order is
     kept; scipy's transform keeps another in about 1 % of cells, and the last in row order gives the Intel
     replay's ATE 0.073 m against 0.070 m: the choice matters no more than any small perturbation does.
+
+    Two shortcuts that leave every array as the whole discs give it, to the bit. Only tiles with hit tiles are read:
+    no other tile holds an occupied cell (mrs_nav.slam.grid), and the Freiburg campus log's windows are half a
+    million cells of mostly open ground. And an occupied cell writes only where none of its occupied neighbours is
+    nearer, or as near and first in row order (the discs' order): a neighbour one cell away is nearer on one side of
+    a line between the two, so in a wall one cell thick a cell writes a line of its disc, not all of it. Both took
+    the field from 1.0 to 0.55 ms a window on the Freiburg 079 log and from 3.7 to 1.7 ms on the campus (their
+    replays' first 2500 windows, the same arrays).
     """
     _, _, shift_y, shift_x = cells
     (y0, y1), (x0, x1) = rows, cols
@@ -638,22 +653,58 @@ def _truncated_field(  # noqa: PLR0917 - numba kernels take positional arguments
     spans = np.empty(reach + 1, dtype=np.int64)
     for dr in range(reach + 1):
         spans[dr] = int(math.sqrt(cap - 1 - dr * dr)) if dr * dr < cap else -1
+    # Per set of occupied neighbours (a bit each, _NEIGHBOURS' order), once it is met: the columns dc from low[dr]
+    # to high[dr] of each disc row dr (from -reach) where the cell is nearer than each of those neighbours, or
+    # as near and before it. A neighbour (ny, nx) is as near as the cell where 2 (dr ny + dc nx) = ny^2 + nx^2.
+    ready = np.zeros(1 << _NEIGHBOURS.shape[0], dtype=np.bool_)
+    low = np.empty((ready.size, 2 * reach + 1), dtype=np.int64)
+    high = np.empty((ready.size, 2 * reach + 1), dtype=np.int64)
     occupied = 0
-    for row in range(height):
-        gy = y0 + row + shift_y
-        for col in range(width):
-            gx = x0 + col + shift_x
-            if not _tile_value(table, logodds, gy, gx) > 0.0:
+    if height <= 0 or width <= 0:  # a window past the grid's edge: no tile to look up
+        return squared, near_iy, near_ix, occupied
+    gy0, gx0 = y0 + shift_y, x0 + shift_x
+    # Row by row, the window's tiles along each: the occupied cells in row order, as the discs' ties need
+    for gy in range(gy0, gy0 + height):
+        row = gy - gy0
+        for tx in range(gx0 // TILE, (gx0 + width - 1) // TILE + 1):
+            slot = table[gy // TILE, tx]
+            if hit_table[gy // TILE, tx] < 0 or slot < 0:
                 continue
-            occupied += 1
-            for r in range(max(row - reach, 0), min(row + reach, height - 1) + 1):
-                half = spans[abs(r - row)]
-                for c in range(max(col - half, 0), min(col + half, width - 1) + 1):
-                    d = (r - row) ** 2 + (c - col) ** 2
-                    if d < squared[r + pad, c + pad]:
-                        squared[r + pad, c + pad] = d
-                        near_iy[r + pad, c + pad] = row + y0
-                        near_ix[r + pad, c + pad] = col + x0
+            for gx in range(max(tx * TILE, gx0), min(tx * TILE + TILE, gx0 + width)):
+                if not logodds[slot, gy % TILE, gx % TILE] > 0.0:
+                    continue
+                occupied += 1
+                col = gx - gx0
+                mask = 0
+                for b in range(_NEIGHBOURS.shape[0]):
+                    r, c = row + _NEIGHBOURS[b, 0], col + _NEIGHBOURS[b, 1]
+                    if 0 <= r < height and 0 <= c < width and _tile_value(table, logodds, gy0 + r, gx0 + c) > 0.0:
+                        mask |= 1 << b
+                if not ready[mask]:
+                    ready[mask] = True
+                    for dr in range(-reach, reach + 1):
+                        lo, hi = -spans[abs(dr)], spans[abs(dr)]
+                        for b in range(_NEIGHBOURS.shape[0]):
+                            if not mask & (1 << b):
+                                continue
+                            ny, nx = _NEIGHBOURS[b, 0], _NEIGHBOURS[b, 1]
+                            # the cell keeps the dc with 2 dc nx <= bound
+                            bound = ny * ny + nx * nx - (1 if b < 4 else 0) - 2 * dr * ny
+                            if nx > 0:
+                                hi = min(hi, bound // 2)
+                            elif nx < 0:
+                                lo = max(lo, -(bound // 2))
+                            elif bound < 0:
+                                hi = lo - 1
+                        low[mask, dr + reach], high[mask, dr + reach] = lo, hi
+                for r in range(max(row - reach, 0), min(row + reach, height - 1) + 1):
+                    k = r - row + reach
+                    for c in range(max(col + low[mask, k], 0), min(col + high[mask, k], width - 1) + 1):
+                        d = (r - row) ** 2 + (c - col) ** 2
+                        if d < squared[r + pad, c + pad]:
+                            squared[r + pad, c + pad] = d
+                            near_iy[r + pad, c + pad] = row + y0
+                            near_ix[r + pad, c + pad] = col + x0
     return squared, near_iy, near_ix, occupied
 
 
