@@ -575,28 +575,33 @@ def _search_scores(  # noqa: PLR0917 - numba kernels take positional arguments
     n = points.shape[0]
     k = offsets.size
     out = np.empty((angles.size, k, k))
-    # Per heading, each point's cell moved by each offset and clipped, once: row starts in ``cells`` per y
-    # offset, columns per x offset; the sums then take one addition of indices per point and offset.
-    rows = np.empty((k, n), dtype=np.int64)
-    cols = np.empty((k, n), dtype=np.int64)
+    # Per heading, each point's cell moved by each offset and clipped: row starts in ``cells`` per y offset,
+    # columns per x offset; then the point's values at every offset added to that offset's sum. Point by point,
+    # not offset by offset over all points: a point's k x k cells lie within a few cache lines, and the sums
+    # still add the points in their order, the same sums to the bit (over a quarter less time on the Freiburg
+    # campus log's windows, some of a million cells; a tenth on the Freiburg 079 log's).
+    rows = np.empty(k, dtype=np.int64)
+    cols = np.empty(k, dtype=np.int64)
+    total = np.empty((k, k))
     for a in range(angles.size):
         yaw = prior[2] + angles[a]
         c, s = math.cos(yaw), math.sin(yaw)
+        total[:] = 0.0
         for p in range(n):
             px, py = points[p, 0], points[p, 1]
             ix = min(max(math.floor((x + c * px - s * py - origin_x) / res), 0), width - 1)
             iy = min(max(math.floor((y + s * px + c * py - origin_y) / res), 0), height - 1)
             for j in range(k):
-                rows[j, p] = min(max(iy + offsets[j], 0), height - 1) * width
-                cols[j, p] = min(max(ix + offsets[j], 0), width - 1)
+                rows[j] = min(max(iy + offsets[j], 0), height - 1) * width
+                cols[j] = min(max(ix + offsets[j], 0), width - 1)
+            for kx in range(k):
+                for ky in range(k):
+                    total[kx, ky] += values[cells[rows[ky] + cols[kx]]]
         for kx in range(k):
             for ky in range(k):
-                total = 0.0
-                for p in range(n):
-                    total += values[cells[rows[ky, p] + cols[kx, p]]]
                 z2 = (angles[a] / spread[1]) ** 2 + ((base[0] + offsets[kx]) * res / spread[0]) ** 2
                 z2 += ((base[1] + offsets[ky]) * res / spread[0]) ** 2
-                out[a, kx, ky] = total / n - PRIOR_WEIGHT * math.log1p(0.5 * z2)
+                out[a, kx, ky] = total[kx, ky] / n - PRIOR_WEIGHT * math.log1p(0.5 * z2)
     return out
 
 
@@ -726,19 +731,24 @@ def _likelihoods(
     fine_table = np.exp(-(distance_table**2) / (2.0 * sigma**2))
     wide_table = np.exp(-(distance_table**2) / (2.0 * sigma_coarse**2))
     height, width = squared.shape
-    # Pooled separably, columns then rows, each as the minimum with shifted copies: loops along rows that the
-    # compiler vectorises (a window's pooling took four times as long cell by cell).
-    across = squared.copy()
+    # Pooled separably, each as the minimum with shifted copies: loops along rows that the compiler vectorises (a
+    # window's pooling took four times as long cell by cell). Down the columns first, each row the minimum of the
+    # rows of its run begun from the run's first (not from a copy of itself, which the run holds again), then
+    # along the rows: a fifth to a quarter less time than along the rows first (0.22 against 0.17 ms on the
+    # Freiburg 079 log's windows, 1.47 against 1.16 ms on the campus's).
+    down = np.empty((height, width), dtype=np.int32)
+    for row in range(height):
+        first, last = max(row - half, 0), min(row + half, height - 1)
+        for col in range(width):  # a loop: a slice assignment took up to a third longer
+            down[row, col] = squared[first, col]
+        for r in range(first + 1, last + 1):
+            for col in range(width):
+                down[row, col] = min(down[row, col], squared[r, col])
+    pooled = down.copy()
     for row in range(height):
         for shift in range(1, half + 1):
             for col in range(shift, width):
-                across[row, col] = min(across[row, col], squared[row, col - shift])
+                pooled[row, col] = min(pooled[row, col], down[row, col - shift])
             for col in range(width - shift):
-                across[row, col] = min(across[row, col], squared[row, col + shift])
-    pooled = np.empty((height, width), dtype=np.int32)
-    for row in range(height):
-        pooled[row] = across[row]
-        for r in range(max(row - half, 0), min(row + half, height - 1) + 1):
-            for col in range(width):
-                pooled[row, col] = min(pooled[row, col], across[r, col])
+                pooled[row, col] = min(pooled[row, col], down[row, col + shift])
     return fine_table, wide_table, pooled
