@@ -535,6 +535,33 @@ def _add_clamped(  # noqa: PLR0917 - numba kernels take positional arguments
     logodds[slot, gy % TILE, gx % TILE] = min(max(cell, -lmax), lmax)
 
 
+@_cell_helper("void(UniTuple(float64, 5), float64, float64, int64, int64, int64[::1], int64[::1])")
+def _sample_cells(  # noqa: PLR0917 - numba kernels take positional arguments
+    frame: tuple[float, float, float, float, float],
+    cos: float,
+    sin: float,
+    first: int,
+    last: int,
+    cell_x: IntArray,
+    cell_y: IntArray,
+) -> None:
+    """The cells ``(ix, iy)`` of a beam's samples ``first`` to ``last`` - 1, half a cell apart from the sensor in
+    the direction ``(cos, sin)``, into the first entries of ``cell_x`` and ``cell_y``; ``frame``: the sensor's
+    x and y, the grid's origin x and y, and its resolution (m). One arithmetic for :func:`_integrate` and
+    :func:`_redraw`, so that both sample a beam alike.
+
+    Why the cells first and the marks after, not each sample marked as it is taken: this loop stores nothing
+    but its results, so the compiler vectorises it, divisions and all. With it (and a cell's second sample
+    skipped) integrate took 0.28 instead of 0.50 ms a scan on the Freiburg 079 log, 1.5 instead of 2.5 ms on the
+    Freiburg campus log (scans taken from their replays, the same grids after)."""
+    sx, sy, origin_x, origin_y, res = frame
+    step = 0.5 * res
+    for k in range(first, last):
+        t = k * step
+        cell_x[k - first] = math.floor((sx + t * cos - origin_x) / res)
+        cell_y[k - first] = math.floor((sy + t * sin - origin_y) / res)
+
+
 @numba.njit("float32[::1](" + _TILED + ", int64[::1], int64[::1])", cache=True)  # type: ignore[misc]
 def _cells(table: TileTable, pool: Float32Array, cells: GridCells, iy: IntArray, ix: IntArray) -> Float32Array:
     """Values of cells ``(iy, ix)`` of a tiled array; 0 outside the grid and in tiles not allocated."""
@@ -617,10 +644,13 @@ def _integrate(  # noqa: PLR0917 - numba kernels take positional arguments
     # all the cells this scan marks, so marking costs O(that window), not O(map).
     x_lo = x_hi = math.floor((sx - origin_x) / res)
     y_lo = y_hi = math.floor((sy - origin_y) / res)
+    step = 0.5 * res
+    most = 0  # samples of a beam at most (below)
     for b in range(ranges.size):
         ix = math.floor((sx + ranges[b] * cos[b] - origin_x) / res)
         iy = math.floor((sy + ranges[b] * sin[b] - origin_y) / res)
         x_lo, x_hi, y_lo, y_hi = min(x_lo, ix), max(x_hi, ix), min(y_lo, iy), max(y_hi, iy)
+        most = max(most, math.ceil(ranges[b] / step))
     x_lo, y_lo = max(x_lo, 0), max(y_lo, 0)
     x_hi, y_hi = min(x_hi, width - 1), min(y_hi, height - 1)
     if x_hi < x_lo or y_hi < y_lo:
@@ -637,13 +667,19 @@ def _integrate(  # noqa: PLR0917 - numba kernels take positional arguments
             mark[iy - y_lo, ix - x_lo] = _HIT
     # Every beam sampled at half a cell up to half a cell before its end, so no crossed cell is skipped on
     # axis-aligned beams and the end cell is left to the occupied update.
-    step = 0.5 * res
+    frame = (sx, sy, origin_x, origin_y, res)
+    cell_x = np.empty(most, dtype=np.int64)
+    cell_y = np.empty(most, dtype=np.int64)
     for b in range(ranges.size):
         length = ranges[b] - 0.5 * res if b < n_hit else ranges[b]
-        for k in range(max(math.ceil(length / step), 0)):
-            t = k * step
-            ix = math.floor((sx + t * cos[b] - origin_x) / res)
-            iy = math.floor((sy + t * sin[b] - origin_y) / res)
+        samples = max(math.ceil(length / step), 0)
+        _sample_cells(frame, cos[b], sin[b], 0, samples, cell_x, cell_y)
+        last_ix = last_iy = -1
+        for k in range(samples):
+            ix, iy = cell_x[k], cell_y[k]
+            if ix == last_ix and iy == last_iy:  # half-cell steps: most cells take two samples
+                continue
+            last_ix, last_iy = ix, iy
             if 0 <= ix < width and 0 <= iy < height and mark[iy - y_lo, ix - x_lo] == 0:
                 mark[iy - y_lo, ix - x_lo] = _FREE
     # Each marked cell updated once, however many beams crossed it.
@@ -723,9 +759,15 @@ def _redraw(  # noqa: PLR0917 - numba kernels take positional arguments
     height, width, shift_y, shift_x = cells
     lfree, loccupied, lmax = update[0], update[1], update[2]
     step = 0.5 * res
+    most = 0  # samples of a beam at most (_sample_cells)
+    for b in range(ranges.size):
+        most = max(most, math.ceil(ranges[b] / step))
+    cell_x = np.empty(most, dtype=np.int64)
+    cell_y = np.empty(most, dtype=np.int64)
     for s in range(starts.size - 1):
         number = first + s + 1
         sx, sy = sensors[s, 0], sensors[s, 1]
+        frame = (sx, sy, origin_x, origin_y, res)
         for b in range(starts[s], starts[s] + n_hits[s]):  # end points, as _integrate marks them
             ex = sx + ranges[b] * cos[b]
             ey = sy + ranges[b] * sin[b]
@@ -757,11 +799,11 @@ def _redraw(  # noqa: PLR0917 - numba kernels take positional arguments
                         t_lo, t_hi = max(t_lo, min(t_a, t_b)), min(t_hi, max(t_a, t_b))
                 if t_hi < t_lo:
                     continue
+                k_lo, k_hi = max(math.floor(t_lo / step) - 1, 0), min(math.ceil(t_hi / step) + 2, samples)
+                _sample_cells(frame, cos[b], sin[b], k_lo, k_hi, cell_x, cell_y)
                 last_ix = last_iy = -1
-                for k in range(max(math.floor(t_lo / step) - 1, 0), min(math.ceil(t_hi / step) + 2, samples)):
-                    t = k * step
-                    ix = math.floor((sx + t * cos[b] - origin_x) / res)
-                    iy = math.floor((sy + t * sin[b] - origin_y) / res)
+                for k in range(k_hi - k_lo):
+                    ix, iy = cell_x[k], cell_y[k]
                     if ix == last_ix and iy == last_iy:  # half-cell steps: most cells take two samples
                         continue
                     last_ix, last_iy = ix, iy
