@@ -10,7 +10,8 @@ that calls ``signal_shutdown``: it waits for the lock like any other thread, and
 Before that handler is in place, while ``rospy.init_node`` walks the package path and waits for the master
 (seconds on a loaded machine, for ever without a master), a Ctrl-C ends the process as the signal's default
 action does, without the ``KeyboardInterrupt`` traceback Python's handler would leave in the launch log: there is
-nothing to shut down yet.
+nothing to shut down yet. The node scripts set that default as their first statement, before imports that take
+seconds on a loaded machine.
 
 Private parameters given on the command line (``_seed:=7``) reach the parameter server through XML-RPC, whose
 integers are 32-bit: rospy raises ``OverflowError`` from deep inside ``init_node`` for a larger one, and
