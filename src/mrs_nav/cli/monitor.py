@@ -58,7 +58,10 @@ def register(subparsers: Any) -> None:
         "--zenoh-config",
         default="",
         metavar="JSON5",
-        help="Zenoh configuration file: TLS certificates, user and password (endpoints and mode come from here)",
+        help=(
+            "Zenoh configuration file: TLS certificates, user and password; --connect and --mode are laid "
+            "over it (they replace its endpoints and mode)"
+        ),
     )
     parser.add_argument("--once", action="store_true", help="wait for data (see --duration), print once and exit")
     parser.add_argument(

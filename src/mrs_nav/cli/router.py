@@ -30,7 +30,13 @@ def register(subparsers: Any) -> None:
         help="Zenoh endpoint to listen on (repeatable; default tcp/127.0.0.1:7447; tcp/0.0.0.0:7447 for a network)",
     )
     parser.add_argument(
-        "--zenoh-config", default="", metavar="JSON5", help="Zenoh configuration file (TLS certificates, users, ...)"
+        "--zenoh-config",
+        default="",
+        metavar="JSON5",
+        help=(
+            "Zenoh configuration file (TLS certificates, users, ...); --listen and router mode are laid over it "
+            "(they replace its endpoints and mode)"
+        ),
     )
     parser.set_defaults(handler=run)
 
