@@ -16,6 +16,7 @@ import sys
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
+from xml.etree import ElementTree
 
 import pytest
 
@@ -247,3 +248,18 @@ def test_from_params_with_nothing_set_gives_the_yaml_values(rospy_node: Any) -> 
         if node == "potential_field_navigation":  # "" means the default file under ROS_HOME
             values["trajectory_file"] = str(config.trajectory_file)
         assert config == config_class.from_values(values), node
+
+
+@pytest.mark.parametrize("launch", sorted((CHECKOUT / "launch").glob("*.launch")), ids=lambda p: p.name)
+def test_launch_files_set_only_parameters_the_node_has(launch: Path) -> None:
+    """A <param> the node does not read (a misspelling) would be ignored without a word; a loaded parameter
+    file must be the node's own."""
+    for node in ElementTree.parse(launch).getroot().iter("node"):
+        if node.get("pkg") != "mrs_nav" or node.get("type") not in NODES:
+            continue
+        name = node.get("type", "")
+        unknown = {p.get("name") for p in node.iter("param")} - set(node_defaults(name))
+        assert not unknown, f"{launch.name}: {name} does not read {sorted(unknown)}"
+        for loaded in node.iter("rosparam"):
+            if loaded.get("file"):
+                assert loaded.get("file") == f"$(find mrs_nav)/config/{name}.yaml", launch.name
