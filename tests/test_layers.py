@@ -26,6 +26,7 @@ RANKS: dict[str, int] = {
     "options": 2,
     "tables": 2,
     "ros_processes": 2,
+    "config_files": 2,  # every node parameter's default (config/*.yaml)
     # the algorithms, each on the layers below it
     "maps": 3,
     "control": 4,

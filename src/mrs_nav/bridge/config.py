@@ -1,17 +1,18 @@
 """The bridge's configuration: Zenoh endpoints, key prefix, topic filters, rate limits and the inbound
 allow-list, validated once into frozen dataclasses.
 
-The same mapping comes from ROS private parameters or from a YAML file (``config/zenoh_bridge.yaml``
-documents every key). Defaults: peer mode listening on ``tcp/127.0.0.1:7447``, multicast scouting off
-(always: the bridge only talks to endpoints it is given), prefix ``mrs_nav``, every topic out except
-``/rosout*`` and ``/clock``, no rate limit, nothing inbound, and the bridge's access control on (remote
-sessions may only put on allow-listed inbound keys).
+The same mapping comes from ROS private parameters or from a YAML file. ``config/zenoh_bridge.yaml`` holds
+every key with its default, which :class:`BridgeConfig` reads: peer mode listening on ``tcp/127.0.0.1:7447``,
+prefix ``mrs_nav``, every topic out except ``/rosout*`` and ``/clock``, no rate limit, nothing inbound, and the
+bridge's access control on (remote sessions may only put on allow-listed inbound keys). Multicast scouting is
+always off: the bridge only talks to endpoints it is given.
 TLS, authentication and the rest of Zenoh's transport settings come from a Zenoh JSON5 file
 (``zenoh_config``), passed through.
 """
 
 from __future__ import annotations
 
+import functools
 import ipaddress
 import math
 import re
@@ -21,12 +22,16 @@ from typing import Any
 
 from mrs_nav.bridge.acl import access_control
 from mrs_nav.bridge.keys import KeyLayout, check_topic, check_type, robot_prefix
+from mrs_nav.config_files import node_default
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.textfiles import yaml12_number
 
 MODES = ("peer", "client", "router")
-DEFAULT_LISTEN = ("tcp/127.0.0.1:7447",)
-DEFAULT_DENY = (r"/rosout(_agg)?", r"/clock")
+_default = functools.partial(node_default, "zenoh_bridge")  # every default: config/zenoh_bridge.yaml
+DEFAULT_LISTEN: tuple[str, ...] = tuple(_default("listen"))
+DEFAULT_ALLOW: tuple[str, ...] = tuple(_default("allow"))
+DEFAULT_DENY: tuple[str, ...] = tuple(_default("deny"))
+DEFAULT_LAYOUT = KeyLayout(_default("layout"))
 # An inbound message may be this big (a PoseStamped with a 256-character frame is 332 bytes) and arrive this
 # often per topic (a person clicking goals) unless its rule says otherwise.
 DEFAULT_INBOUND_BYTES = 1024
@@ -86,7 +91,7 @@ def _compile(patterns: Iterable[str], what: str) -> tuple[re.Pattern[str], ...]:
 class TopicFilter:
     """Which ROS topics go out: a topic passes if it fully matches an ``allow`` regex and no ``deny`` one."""
 
-    allow: tuple[str, ...] = (".*",)
+    allow: tuple[str, ...] = DEFAULT_ALLOW
     deny: tuple[str, ...] = DEFAULT_DENY
     _allow: tuple[re.Pattern[str], ...] = field(init=False, repr=False, compare=False)
     _deny: tuple[re.Pattern[str], ...] = field(init=False, repr=False, compare=False)
@@ -132,21 +137,21 @@ class BridgeConfig:
     or certificate common names; empty: anyone who can connect).
     """
 
-    mode: str = "peer"
+    mode: str = _default("mode")
     listen: tuple[str, ...] = DEFAULT_LISTEN
-    connect: tuple[str, ...] = ()
-    prefix: str = "mrs_nav"
-    namespace: str = ""
-    layout: KeyLayout = KeyLayout.MRS_NAV
+    connect: tuple[str, ...] = tuple(_default("connect"))
+    prefix: str = _default("prefix")
+    namespace: str = _default("namespace")
+    layout: KeyLayout = DEFAULT_LAYOUT
     topics: TopicFilter = TopicFilter()
-    max_rates: tuple[tuple[str, float], ...] = ()
-    default_max_rate: float = 0.0
-    inbound: tuple[InboundRule, ...] = ()
-    discovery_period: float = 1.0
-    retry_period: float = 1.0
-    zenoh_config: str = ""
-    acl: bool = True
-    operators: tuple[str, ...] = ()
+    max_rates: tuple[tuple[str, float], ...] = tuple(_default("max_rates").items())
+    default_max_rate: float = _default("default_max_rate")
+    inbound: tuple[InboundRule, ...] = ()  # the file's inbound: [] (rules are built by from_mapping)
+    discovery_period: float = _default("discovery_period")
+    retry_period: float = _default("retry_period")
+    zenoh_config: str = _default("zenoh_config")
+    acl: bool = _default("acl")
+    operators: tuple[str, ...] = tuple(_default("operators"))
     _rates: tuple[tuple[re.Pattern[str], float], ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -250,7 +255,8 @@ class BridgeConfig:
                 choices = ", ".join(layout.value for layout in KeyLayout)
                 raise InvalidInputError(f"layout {params['layout']!r}: expected one of {choices}") from None
         kwargs["topics"] = TopicFilter(
-            _text_list(params.get("allow", [".*"]), "allow"), _text_list(params.get("deny", list(DEFAULT_DENY)), "deny")
+            _text_list(params.get("allow", DEFAULT_ALLOW), "allow"),
+            _text_list(params.get("deny", DEFAULT_DENY), "deny"),
         )
         rates = params.get("max_rates") or {}
         if not isinstance(rates, Mapping):

@@ -1,17 +1,20 @@
 """Parameters of the particle filter, under AMCL's names where they mean the same thing.
 
-Units: metres, radians, seconds. The odometry alphas are those of AMCL's ``diff`` model (Thrun et al.,
+Units: metres, radians, seconds. Defaults: ``config/localisation.yaml`` (:mod:`mrs_nav.config_files`), which the
+localisation node reads too. The odometry alphas are those of AMCL's ``diff`` model (Thrun et al.,
 *Probabilistic Robotics*, table 5.6): variances per squared motion, see :mod:`mrs_nav.motion_model`.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from mrs_nav.config_files import node_default
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.motion_model import MAX_ALPHA, OdometryNoise
 
@@ -25,42 +28,45 @@ MAX_BEAMS = 3600
 #: of CPU; the default is 600 000.
 MAX_BEAM_ENDPOINTS = 10_000_000
 
+_default = functools.partial(node_default, "localisation")
+
 
 @dataclass(frozen=True)
 class LocalisationConfig:
-    """Particle counts, KLD bounds, update gates, odometry noise, likelihood field and recovery rates."""
+    """Particle counts, KLD bounds, update gates, odometry noise, likelihood field and recovery rates (each
+    field's unit, range and meaning: config/localisation.yaml)."""
 
-    min_particles: int = 500
-    max_particles: int = 10000
-    kld_err: float = 0.01  # KLD bound on the error of the sample-based posterior
-    kld_z: float = 0.99  # upper standard normal quantile of (1 - delta)
-    kld_bin_xy: float = 0.5  # m, histogram bin of the KLD count (AMCL's fixed 0.5 m)
-    kld_bin_yaw: float = math.radians(10.0)  # rad, histogram bin of the KLD count (AMCL's fixed 10 degrees)
-    update_min_d: float = 0.2  # m travelled before the next filter update
-    update_min_a: float = math.pi / 6.0  # rad turned before the next filter update
-    resample_interval: int = 1  # filter updates between resamplings
-    odom_alpha1: float = 0.02  # rad^2/rad^2: rotation noise from rotation
-    odom_alpha2: float = 0.02  # rad^2/m^2: rotation noise from translation
-    odom_alpha3: float = 0.02  # m^2/m^2: translation noise from translation
-    odom_alpha4: float = 0.02  # m^2/rad^2: translation noise from rotation
-    laser_max_beams: int = 60  # beams used per scan, evenly spread
-    laser_z_hit: float = 0.95  # weight of the Gaussian about the nearest obstacle
-    laser_z_rand: float = 0.05  # weight of uniform random readings
-    laser_sigma_hit: float = 0.1  # m, std dev of the hit Gaussian
-    laser_sigma_max: float = 0.4  # m, broadest hit spread while the pose is uncertain
-    laser_likelihood_max_dist: float = 2.0  # m, distance transform clipped here
-    laser_min_range: float = -1.0  # m, readings below are ignored (< 0: the scan's own range_min)
-    laser_max_range: float = -1.0  # m, readings above are ignored (< 0: the scan's own range_max)
-    min_effective_fraction: float = 0.1  # scan likelihood tempered to keep this share of particles effective
-    recovery_alpha_slow: float = 0.001  # decay of the slow average likelihood (0 disables recovery)
-    recovery_alpha_fast: float = 0.1  # decay of the fast average likelihood
-    initial_pose_x: float = 0.0  # m
-    initial_pose_y: float = 0.0  # m
-    initial_pose_a: float = 0.0  # rad
-    initial_cov_xx: float = 0.5 * 0.5  # m^2
-    initial_cov_yy: float = 0.5 * 0.5  # m^2
-    initial_cov_aa: float = (math.pi / 12.0) ** 2  # rad^2
-    seed: int = -1  # random seed (< 0: from the operating system)
+    min_particles: int = _default("min_particles")
+    max_particles: int = _default("max_particles")
+    kld_err: float = _default("kld_err")
+    kld_z: float = _default("kld_z")
+    kld_bin_xy: float = _default("kld_bin_xy")
+    kld_bin_yaw: float = _default("kld_bin_yaw")
+    update_min_d: float = _default("update_min_d")
+    update_min_a: float = _default("update_min_a")
+    resample_interval: int = _default("resample_interval")
+    odom_alpha1: float = _default("odom_alpha1")
+    odom_alpha2: float = _default("odom_alpha2")
+    odom_alpha3: float = _default("odom_alpha3")
+    odom_alpha4: float = _default("odom_alpha4")
+    laser_max_beams: int = _default("laser_max_beams")
+    laser_z_hit: float = _default("laser_z_hit")
+    laser_z_rand: float = _default("laser_z_rand")
+    laser_sigma_hit: float = _default("laser_sigma_hit")
+    laser_sigma_max: float = _default("laser_sigma_max")
+    laser_likelihood_max_dist: float = _default("laser_likelihood_max_dist")
+    laser_min_range: float = _default("laser_min_range")
+    laser_max_range: float = _default("laser_max_range")
+    min_effective_fraction: float = _default("min_effective_fraction")
+    recovery_alpha_slow: float = _default("recovery_alpha_slow")
+    recovery_alpha_fast: float = _default("recovery_alpha_fast")
+    initial_pose_x: float = _default("initial_pose_x")
+    initial_pose_y: float = _default("initial_pose_y")
+    initial_pose_a: float = _default("initial_pose_a")
+    initial_cov_xx: float = _default("initial_cov_xx")
+    initial_cov_yy: float = _default("initial_cov_yy")
+    initial_cov_aa: float = _default("initial_cov_aa")
+    seed: int = _default("seed")
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):

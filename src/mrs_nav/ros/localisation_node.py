@@ -21,8 +21,10 @@ A scan or pose that cannot be used is logged (throttled) and skipped; the node n
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import threading
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,17 +37,17 @@ from nav_msgs.srv import GetMap
 from sensor_msgs.msg import LaserScan
 from std_srvs.srv import Empty, EmptyRequest, EmptyResponse
 
+from mrs_nav.config_files import node_default
 from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.geometry import FloatArray, Pose2D, format_point
 from mrs_nav.localisation import BeamScan, LocalisationConfig, ParticleFilter, PoseEstimate
 from mrs_nav.ros.conversions import pose_from_msg, pose_msg
 from mrs_nav.ros.map_odom import MapOdomBroadcaster, check_timing, lookup_pose, tf_state
 from mrs_nav.ros.navigation_conversions import grid_from_msg
-from mrs_nav.ros.params import private_param
+from mrs_nav.ros.params import private_params
 
-# Each filter parameter with its default, so that it is read as the default's type: rosparam hands 1e-3 (an
-# exponent without a dot) over as text.
-_FILTER_PARAMS = {f.name: f.default for f in dataclasses.fields(LocalisationConfig)}
+NODE = "localisation"
+_default = functools.partial(node_default, NODE)
 _COV_INDEX = (0, 1, 5)  # x, y, yaw rows/columns of a 6x6 pose covariance
 _TIME_JUMP = 1.0  # s: the clock this much behind its last reading means sim time went back (a bag restarted)
 
@@ -55,30 +57,29 @@ class LocalisationNodeConfig:
     """The node's private parameters: frames, timing, map source, and the core :class:`LocalisationConfig`."""
 
     filter: LocalisationConfig
-    global_frame_id: str = "map"
-    odom_frame_id: str = "odom"
-    base_frame_id: str = "base_footprint"
-    transform_tolerance: float = 0.1
-    transform_publish_period: float = 0.05
-    tf_wait: float = 0.2
-    use_map_topic: bool = True
+    global_frame_id: str = _default("global_frame_id")
+    odom_frame_id: str = _default("odom_frame_id")
+    base_frame_id: str = _default("base_frame_id")
+    transform_tolerance: float = _default("transform_tolerance")
+    transform_publish_period: float = _default("transform_publish_period")
+    tf_wait: float = _default("tf_wait")
+    use_map_topic: bool = _default("use_map_topic")
 
     def __post_init__(self) -> None:
         check_timing(self.transform_publish_period, transform_tolerance=self.transform_tolerance, tf_wait=self.tf_wait)
 
     @classmethod
     def from_params(cls) -> LocalisationNodeConfig:
-        """Read the ``~`` parameters once (defaults in config/localisation.yaml); bad values raise."""
-        values = {name: private_param(name, default) for name, default in _FILTER_PARAMS.items()}
+        """Read the ``~`` parameters once (defaults: config/localisation.yaml); bad values raise."""
+        return cls.from_values(private_params(NODE))
+
+    @classmethod
+    def from_values(cls, values: Mapping[str, Any]) -> LocalisationNodeConfig:
+        """The config from every parameter of config/localisation.yaml by name."""
+        own = {f.name for f in dataclasses.fields(cls)} - {"filter"}
         return cls(
-            filter=LocalisationConfig.from_mapping(values),
-            global_frame_id=private_param("global_frame_id", "map"),
-            odom_frame_id=private_param("odom_frame_id", "odom"),
-            base_frame_id=private_param("base_frame_id", "base_footprint"),
-            transform_tolerance=private_param("transform_tolerance", 0.1),
-            transform_publish_period=private_param("transform_publish_period", 0.05),
-            tf_wait=private_param("tf_wait", 0.2),
-            use_map_topic=private_param("use_map_topic", True),
+            filter=LocalisationConfig.from_mapping({k: v for k, v in values.items() if k not in own}),
+            **{name: values[name] for name in own},
         )
 
 

@@ -25,7 +25,9 @@ from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.options import Parser, integer_option
 from mrs_nav.ros.map_messages import occupancy_grid_msg
 from mrs_nav.ros.navigation_conversions import grid_from_msg
-from mrs_nav.ros.params import private_param
+from mrs_nav.ros.params import private_params
+
+NODE = "map_server"  # its private parameters: config/map_server.yaml
 
 
 class MapServerNode:
@@ -48,7 +50,7 @@ class MapServerNode:
         parser = Parser(prog="map_server", description="Serve a map_server map (.yaml + .pgm).")
         parser.add_argument("map", type=Path, help="the map's .yaml description")
         args = parser.parse_args(argv)
-        return cls(load_map(args.map), private_param("frame_id", "map"))
+        return cls(load_map(args.map), private_params(NODE)["frame_id"])
 
 
 @dataclass(frozen=True)

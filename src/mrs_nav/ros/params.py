@@ -1,5 +1,8 @@
 """Reading a node's private (``~``) parameters, the one place every node does it.
 
+``private_params("slam")`` reads every parameter of ``config/slam.yaml`` (:mod:`mrs_nav.config_files`), each
+as the type of its default there, falling back to that default when it is not set: the node's only defaults,
+so ``rosrun`` (nothing loaded into ``~``) and ``roslaunch`` (the file loaded) start from the same values.
 ``private_param("rate", 10.0)`` returns ``~rate`` converted to the type of its default (bool, int, float or
 str), or the default when the parameter is not set. A value of the wrong kind (``rate: "fast"``, a float for an
 int, anything but a bool for a bool) raises :class:`InvalidInputError` naming the parameter, so a node stops at
@@ -13,6 +16,7 @@ from typing import Any, TypeVar
 
 import rospy
 
+from mrs_nav.config_files import node_defaults
 from mrs_nav.errors import InvalidInputError
 
 T = TypeVar("T", bool, int, float, str)
@@ -46,3 +50,15 @@ def private_param(name: str, default: T) -> T:
     if not rospy.has_param(f"~{name}"):
         return default
     return _convert(name, rospy.get_param(f"~{name}"), default)
+
+
+def private_params(node: str) -> dict[str, Any]:
+    """Every parameter of ``node`` (``config/<node>.yaml``): ``~name`` as the type of its default there (lists
+    and mappings as given), the default where unset."""
+    values: dict[str, Any] = {}
+    for name, default in node_defaults(node).items():
+        if isinstance(default, bool | int | float | str):
+            values[name] = private_param(name, default)
+        else:
+            values[name] = rospy.get_param(f"~{name}", default)
+    return values

@@ -15,11 +15,13 @@ a throttled warning.
 
 from __future__ import annotations
 
+import functools
 import math
 import threading
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TextIO
+from typing import Any, TextIO
 
 import numpy as np
 import rospkg
@@ -30,12 +32,12 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
+from mrs_nav.config_files import node_default, node_defaults
 from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.fields.follower import FieldFollower, FieldFollowerConfig, scan_obstacles
 from mrs_nav.geometry import Pose2D, format_point
 from mrs_nav.maps.obstacles import Obstacles
 from mrs_nav.maps.world import load_world
-from mrs_nav.robot import BURGER_MAX_ANGULAR, BURGER_MAX_LINEAR, BURGER_RADIUS
 from mrs_nav.ros.conversions import (
     any_reading,
     pose_from_odometry,
@@ -44,29 +46,39 @@ from mrs_nav.ros.conversions import (
     valid_ranges,
 )
 from mrs_nav.ros.navigation_conversions import latest_pose, pose_in_frame, publish_unless_shutdown
-from mrs_nav.ros.params import private_param
+from mrs_nav.ros.params import private_params
 
+NODE = "potential_field_navigation"
+_default = functools.partial(node_default, NODE)
 OBSTACLE_SOURCES = ("world", "scan")
 TRAJECTORY_FILE = "potential_field_trajectory.csv"  # under ROS_HOME unless ~trajectory_file says otherwise
 POSE_SOURCES = ("ground_truth", "tf")
 
 
+# The follower's parameters, named as FieldFollowerConfig's fields.
+_FOLLOWER_PARAMS = ("epsilon", "speed", "robot_radius", "safety_margin", "goal_tolerance", "max_linear", "max_angular")
+
+
+def _follower(values: Mapping[str, Any]) -> FieldFollowerConfig:
+    return FieldFollowerConfig(**{name: values[name] for name in _FOLLOWER_PARAMS})
+
+
 @dataclass(frozen=True)
 class PotentialFieldNavigationConfig:
-    """The node's private parameters (defaults as in config/potential_field_navigation.yaml)."""
+    """The node's private parameters (defaults: config/potential_field_navigation.yaml)."""
 
-    obstacles: str = "world"
-    world: Path | None = None
-    pose_source: str = "ground_truth"
-    frame: str = "odom"
-    base_frame: str = "base_footprint"
-    goal: tuple[float, float] | None = None
-    rate_hz: float = 10.0
-    pose_timeout_s: float = 1.0
+    obstacles: str = _default("obstacles")
+    world: Path | None = None  # ~world "": none
+    pose_source: str = _default("pose_source")
+    frame: str = _default("frame")
+    base_frame: str = _default("base_frame")
+    goal: tuple[float, float] | None = None  # ~goal_x, ~goal_y NaN: wait for move_base_simple/goal
+    rate_hz: float = _default("rate")
+    pose_timeout_s: float = _default("pose_timeout")
     trajectory_file: Path | None = None
-    seed: int | None = None
-    heartbeat: bool = False
-    follower: FieldFollowerConfig = field(default_factory=FieldFollowerConfig)
+    seed: int | None = None  # ~seed < 0: random
+    heartbeat: bool = _default("heartbeat")
+    follower: FieldFollowerConfig = field(default_factory=lambda: _follower(node_defaults(NODE)))
 
     def __post_init__(self) -> None:
         if self.obstacles not in OBSTACLE_SOURCES:
@@ -82,32 +94,31 @@ class PotentialFieldNavigationConfig:
 
     @classmethod
     def from_params(cls) -> PotentialFieldNavigationConfig:
-        gx, gy = private_param("goal_x", math.nan), private_param("goal_y", math.nan)
-        world = private_param("world", "")
-        trajectory = private_param("trajectory_file", "") or str(Path(rospkg.get_ros_home()) / TRAJECTORY_FILE)
-        seed = private_param("seed", -1)
-        follower = FieldFollowerConfig(
-            epsilon=private_param("epsilon", 0.2),
-            speed=private_param("speed", 0.2),
-            robot_radius=private_param("robot_radius", BURGER_RADIUS),
-            safety_margin=private_param("safety_margin", 0.05),
-            goal_tolerance=private_param("goal_tolerance", 0.1),
-            max_linear=private_param("max_linear", BURGER_MAX_LINEAR),
-            max_angular=private_param("max_angular", BURGER_MAX_ANGULAR),
-        )
+        """Read the ``~`` parameters (defaults: config/potential_field_navigation.yaml)."""
+        values = private_params(NODE)
+        if not values["trajectory_file"]:
+            values["trajectory_file"] = str(Path(rospkg.get_ros_home()) / TRAJECTORY_FILE)
+        return cls.from_values(values)
+
+    @classmethod
+    def from_values(cls, values: Mapping[str, Any]) -> PotentialFieldNavigationConfig:
+        """The config from every parameter of config/potential_field_navigation.yaml by name (an empty
+        ``trajectory_file``: no file)."""
+        gx, gy, world, seed = values["goal_x"], values["goal_y"], values["world"], values["seed"]
+        trajectory = values["trajectory_file"]
         return cls(
-            obstacles=private_param("obstacles", "world"),
+            obstacles=values["obstacles"],
             world=Path(world) if world else None,
-            pose_source=private_param("pose_source", "ground_truth"),
-            frame=private_param("frame", "odom"),
-            base_frame=private_param("base_frame", "base_footprint"),
+            pose_source=values["pose_source"],
+            frame=values["frame"],
+            base_frame=values["base_frame"],
             goal=(gx, gy) if math.isfinite(gx) and math.isfinite(gy) else None,
-            rate_hz=private_param("rate", 10.0),
-            pose_timeout_s=private_param("pose_timeout", 1.0),
-            trajectory_file=None if trajectory == "none" else Path(trajectory).expanduser(),
+            rate_hz=values["rate"],
+            pose_timeout_s=values["pose_timeout"],
+            trajectory_file=None if trajectory in ("none", "") else Path(trajectory).expanduser(),
             seed=None if seed < 0 else seed,
-            heartbeat=private_param("heartbeat", False),
-            follower=follower,
+            heartbeat=values["heartbeat"],
+            follower=_follower(values),
         )
 
 

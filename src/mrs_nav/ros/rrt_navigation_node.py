@@ -28,12 +28,15 @@ and adopts the plan on the first tick after it is done.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 import sys
 import threading
+from collections.abc import Mapping
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
+from typing import Any
 
 import actionlib
 import numpy as np
@@ -48,7 +51,8 @@ from rospy.numpy_msg import numpy_msg
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
-from mrs_nav.control.goal_approach import XY_GOAL_TOLERANCE, YAW_GOAL_TOLERANCE, ApproachConfig
+from mrs_nav.config_files import node_default, node_defaults
+from mrs_nav.control.goal_approach import ApproachConfig
 from mrs_nav.control.path_following import FollowerConfig
 from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.geometry import Pose2D
@@ -66,7 +70,6 @@ from mrs_nav.navigation.navigator import (
     rrt_planner,
 )
 from mrs_nav.navigation.plan_worker import run_plan
-from mrs_nav.robot import BURGER_MAX_ANGULAR, BURGER_MAX_LINEAR, BURGER_RADIUS
 from mrs_nav.ros.conversions import pose_msg
 from mrs_nav.ros.navigation_conversions import (
     goal_heading,
@@ -78,7 +81,7 @@ from mrs_nav.ros.navigation_conversions import (
     publish_unless_shutdown,
     scan_in_frame,
 )
-from mrs_nav.ros.params import private_param
+from mrs_nav.ros.params import private_params
 
 # The status word published with each event (the navigator's goal state after it).
 STATUS_OF_EVENT = {
@@ -93,29 +96,69 @@ STATUS_OF_EVENT = {
     EventKind.REACHED: "reached",
     EventKind.FAILED: "failed",
 }
+NODE = "rrt_navigation"
+_default = functools.partial(node_default, NODE)
 COSTMAP_PERIOD_S = 1.0  # sim seconds between costmap messages at most (rviz redraws a big grid slowly)
+
+
+def _navigator(values: Mapping[str, Any]) -> NavigatorConfig:
+    """The navigator's part of the parameters (move_base's names) as its config."""
+    max_linear, max_angular = values["max_vel_x"], values["max_vel_theta"]
+    follower = FollowerConfig(
+        speed=values["speed"],
+        epsilon=values["epsilon"],
+        gain=values["gain"],
+        max_linear=max_linear,
+        max_angular=max_angular,
+    )
+    approach = ApproachConfig(
+        xy_tolerance_m=values["xy_goal_tolerance"],
+        yaw_tolerance_rad=values["yaw_goal_tolerance"],
+        max_linear=max_linear,
+        max_angular=max_angular,
+    )
+    planner_frequency = values["planner_frequency"]
+    if not (math.isfinite(planner_frequency) and planner_frequency >= 0.0):
+        raise InvalidInputError(f"~planner_frequency: must be a number >= 0 (0 = off), got {planner_frequency}")
+    return NavigatorConfig(
+        robot_radius=values["robot_radius"],
+        safety_margin_m=values["safety_margin"],
+        stop_clearance_m=values["stop_clearance"],
+        approach_radius_m=values["approach_radius"],
+        allow_unknown=values["allow_unknown"],
+        mark_unknown=values["mark_unknown"],
+        stray_distance_m=values["stray_distance"],
+        replan_period_s=1.0 / planner_frequency if planner_frequency > 0.0 else math.inf,
+        improvement_ratio=values["improvement_ratio"],
+        max_failed_plans=values["max_failed_plans"],
+        retry_delay_s=values["retry_delay"],
+        progress_timeout_s=values["progress_timeout"],
+        map_timeout_s=values["map_timeout"],
+        follower=follower,
+        approach=approach,
+    )
 
 
 @dataclass(frozen=True)
 class RrtNavigationConfig:
-    """The node's private parameters (defaults as in config/rrt_navigation.yaml)."""
+    """The node's private parameters (defaults: config/rrt_navigation.yaml)."""
 
-    planner: str = "rrt_star"
-    time_budget_s: float = 0.3
-    max_iterations: int | None = None  # None: the wall-clock budget alone ends a plan
-    controller_frequency: float = 10.0
-    pose_timeout_s: float = 1.0
-    correction_timeout_s: float = 5.0
-    correction_freshness_s: float = 0.15
-    scan_timeout_s: float = 0.4
+    planner: str = _default("planner")
+    time_budget_s: float = _default("time_budget")
+    max_iterations: int | None = None  # None (~max_iterations 0): the wall-clock budget alone ends a plan
+    controller_frequency: float = _default("controller_frequency")
+    pose_timeout_s: float = _default("pose_timeout")
+    correction_timeout_s: float = _default("correction_timeout")
+    correction_freshness_s: float = _default("correction_freshness")
+    scan_timeout_s: float = _default("scan_timeout")
     # s (sim) to wait for tf at a scan's stamp: the odometry of that instant is on its way with the scan
-    transform_tolerance_s: float = 0.1
-    map_frame: str = "map"
-    odom_frame: str = "odom"
-    base_frame: str = "base_footprint"
-    seed: int | None = None
-    heartbeat: bool = False
-    navigator: NavigatorConfig = field(default_factory=NavigatorConfig)
+    transform_tolerance_s: float = _default("transform_tolerance")
+    map_frame: str = _default("map_frame")
+    odom_frame: str = _default("odom_frame")
+    base_frame: str = _default("base_frame")
+    seed: int | None = None  # None (~seed < 0): random
+    heartbeat: bool = _default("heartbeat")
+    navigator: NavigatorConfig = field(default_factory=lambda: _navigator(node_defaults(NODE)))
 
     def __post_init__(self) -> None:
         if self.planner not in PLANNERS:
@@ -133,59 +176,29 @@ class RrtNavigationConfig:
 
     @classmethod
     def from_params(cls) -> RrtNavigationConfig:
-        max_linear = private_param("max_vel_x", BURGER_MAX_LINEAR)
-        max_angular = private_param("max_vel_theta", BURGER_MAX_ANGULAR)
-        follower = FollowerConfig(
-            speed=private_param("speed", 0.2),
-            epsilon=private_param("epsilon", 0.1),
-            gain=private_param("gain", 2.0),
-            max_linear=max_linear,
-            max_angular=max_angular,
-        )
-        approach = ApproachConfig(
-            xy_tolerance_m=private_param("xy_goal_tolerance", XY_GOAL_TOLERANCE),
-            yaw_tolerance_rad=private_param("yaw_goal_tolerance", YAW_GOAL_TOLERANCE),
-            max_linear=max_linear,
-            max_angular=max_angular,
-        )
-        planner_frequency = private_param("planner_frequency", 0.2)
-        if not (math.isfinite(planner_frequency) and planner_frequency >= 0.0):
-            raise InvalidInputError(f"~planner_frequency: must be a number >= 0 (0 = off), got {planner_frequency}")
-        navigator = NavigatorConfig(
-            robot_radius=private_param("robot_radius", BURGER_RADIUS),
-            safety_margin_m=private_param("safety_margin", 0.1),
-            stop_clearance_m=private_param("stop_clearance", 0.05),
-            approach_radius_m=private_param("approach_radius", 0.3),
-            allow_unknown=private_param("allow_unknown", True),
-            mark_unknown=private_param("mark_unknown", False),
-            stray_distance_m=private_param("stray_distance", 0.3),
-            replan_period_s=1.0 / planner_frequency if planner_frequency > 0.0 else math.inf,
-            improvement_ratio=private_param("improvement_ratio", 0.85),
-            max_failed_plans=private_param("max_failed_plans", 5),
-            retry_delay_s=private_param("retry_delay", 1.0),
-            progress_timeout_s=private_param("progress_timeout", 30.0),
-            map_timeout_s=private_param("map_timeout", 0.0),
-            follower=follower,
-            approach=approach,
-        )
-        seed = private_param("seed", -1)
-        max_iterations = private_param("max_iterations", 0)
+        """Read the ``~`` parameters (defaults: config/rrt_navigation.yaml)."""
+        return cls.from_values(private_params(NODE))
+
+    @classmethod
+    def from_values(cls, values: Mapping[str, Any]) -> RrtNavigationConfig:
+        """The config from every parameter of config/rrt_navigation.yaml by name."""
+        seed, max_iterations = values["seed"], values["max_iterations"]
         return cls(
-            planner=private_param("planner", "rrt_star"),
-            time_budget_s=private_param("time_budget", 0.3),
+            planner=values["planner"],
+            time_budget_s=values["time_budget"],
             max_iterations=None if max_iterations == 0 else max_iterations,
-            controller_frequency=private_param("controller_frequency", 10.0),
-            pose_timeout_s=private_param("pose_timeout", 1.0),
-            correction_timeout_s=private_param("correction_timeout", 5.0),
-            correction_freshness_s=private_param("correction_freshness", 0.15),
-            scan_timeout_s=private_param("scan_timeout", 0.4),
-            transform_tolerance_s=private_param("transform_tolerance", 0.1),
-            map_frame=private_param("map_frame", "map"),
-            odom_frame=private_param("odom_frame", "odom"),
-            base_frame=private_param("base_frame", "base_footprint"),
+            controller_frequency=values["controller_frequency"],
+            pose_timeout_s=values["pose_timeout"],
+            correction_timeout_s=values["correction_timeout"],
+            correction_freshness_s=values["correction_freshness"],
+            scan_timeout_s=values["scan_timeout"],
+            transform_tolerance_s=values["transform_tolerance"],
+            map_frame=values["map_frame"],
+            odom_frame=values["odom_frame"],
+            base_frame=values["base_frame"],
             seed=None if seed < 0 else seed,
-            heartbeat=private_param("heartbeat", False),
-            navigator=navigator,
+            heartbeat=values["heartbeat"],
+            navigator=_navigator(values),
         )
 
 

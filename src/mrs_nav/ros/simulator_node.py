@@ -32,10 +32,12 @@ like wall contacts, and in lockstep the simulation waits for every robot's contr
 
 from __future__ import annotations
 
+import functools
 import math
 import threading
 import time
-from dataclasses import dataclass, field
+from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -52,6 +54,7 @@ from sensor_msgs.msg import JointState, LaserScan
 from std_msgs.msg import UInt32
 from visualization_msgs.msg import Marker
 
+from mrs_nav.config_files import node_default
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.maps.world import Box, load_world
@@ -65,7 +68,7 @@ from mrs_nav.ros.conversions import (
     transform_stamped,
     twist_from_msg,
 )
-from mrs_nav.ros.params import private_param
+from mrs_nav.ros.params import private_params
 from mrs_nav.sim import (
     LaserParams,
     LockstepConfig,
@@ -77,6 +80,8 @@ from mrs_nav.sim import (
 )
 
 WHEEL_JOINTS = ("wheel_left_joint", "wheel_right_joint")
+NODE = "simulator"
+_default = functools.partial(node_default, NODE)
 # When pacing falls this far behind (s of wall time), the lag is forgiven rather than caught up in a burst.
 _MAX_LAG = 0.25
 
@@ -97,17 +102,17 @@ class SimulatorNodeConfig:
 
     world: Path
     start: Pose2D
-    sim: SimulatorConfig = field(default_factory=SimulatorConfig)
-    real_time_factor: float = 1.0
-    odom_rate: float = 50.0
-    clock_rate: float = 100.0
-    joint_states_rate: float = 10.0
-    odom_frame: str = "odom"
-    base_frame: str = "base_footprint"
-    scan_frame: str = "base_scan"
-    ground_truth_frame: str = "world"
-    publish_tf: bool = True
-    lockstep: LockstepConfig | None = None
+    sim: SimulatorConfig
+    real_time_factor: float = _default("real_time_factor")
+    odom_rate: float = _default("odom_rate")
+    clock_rate: float = _default("clock_rate")
+    joint_states_rate: float = _default("joint_states_rate")
+    odom_frame: str = _default("odom_frame")
+    base_frame: str = _default("base_frame")
+    scan_frame: str = _default("scan_frame")
+    ground_truth_frame: str = _default("ground_truth_frame")
+    publish_tf: bool = _default("publish_tf")
+    lockstep: LockstepConfig | None = None  # ~lockstep false
     robots: tuple[Pose2D, ...] = ()  # empty: one robot at ``start`` with unprefixed topics and frames
 
     def __post_init__(self) -> None:
@@ -121,42 +126,39 @@ class SimulatorNodeConfig:
 
     @classmethod
     def from_params(cls) -> SimulatorNodeConfig:
-        """Read the ``~`` parameters (defaults as in config/simulator.yaml)."""
+        """Read the ``~`` parameters (defaults: config/simulator.yaml)."""
+        return cls.from_values(private_params(NODE))
 
-        world = private_param("world", "")
-        if not world:
+    @classmethod
+    def from_values(cls, values: Mapping[str, Any]) -> SimulatorNodeConfig:
+        """The config from every parameter of config/simulator.yaml by name."""
+        if not values["world"]:
             raise InvalidInputError("~world: a world file is required")
         laser = LaserParams(
-            range_min=private_param("range_min", 0.12),
-            range_max=private_param("range_max", 3.5),
-            rate=private_param("scan_rate", 5.0),
-            noise_sigma=private_param("scan_noise", 0.01),
+            range_min=values["range_min"],
+            range_max=values["range_max"],
+            rate=values["scan_rate"],
+            noise_sigma=values["scan_noise"],
         )
         sim = SimulatorConfig(
-            laser=laser,
-            physics_rate=private_param("physics_rate", 100.0),
-            odom_noise=private_param("odom_noise", 0.0),
-            seed=private_param("seed", 0),
+            laser=laser, physics_rate=values["physics_rate"], odom_noise=values["odom_noise"], seed=values["seed"]
         )
+        lockstep = LockstepConfig(period=values["lockstep_period"], timeout=values["lockstep_timeout"])
         return cls(
-            world=resolve_world(world),
-            start=Pose2D(private_param("x", 0.0), private_param("y", 0.0), private_param("yaw", 0.0)),
+            world=resolve_world(values["world"]),
+            start=Pose2D(values["x"], values["y"], values["yaw"]),
             sim=sim,
-            real_time_factor=private_param("real_time_factor", 1.0),
-            odom_rate=private_param("odom_rate", 50.0),
-            clock_rate=private_param("clock_rate", 100.0),
-            joint_states_rate=private_param("joint_states_rate", 10.0),
-            odom_frame=private_param("odom_frame", "odom"),
-            base_frame=private_param("base_frame", "base_footprint"),
-            scan_frame=private_param("scan_frame", "base_scan"),
-            ground_truth_frame=private_param("ground_truth_frame", "world"),
-            publish_tf=private_param("publish_tf", True),
-            lockstep=LockstepConfig(
-                period=private_param("lockstep_period", 0.1), timeout=private_param("lockstep_timeout", 1.0)
-            )
-            if private_param("lockstep", False)
-            else None,
-            robots=parse_poses(private_param("robots", ""), "~robots"),
+            real_time_factor=values["real_time_factor"],
+            odom_rate=values["odom_rate"],
+            clock_rate=values["clock_rate"],
+            joint_states_rate=values["joint_states_rate"],
+            odom_frame=values["odom_frame"],
+            base_frame=values["base_frame"],
+            scan_frame=values["scan_frame"],
+            ground_truth_frame=values["ground_truth_frame"],
+            publish_tf=values["publish_tf"],
+            lockstep=lockstep if values["lockstep"] else None,
+            robots=parse_poses(values["robots"], "~robots"),
         )
 
     def robot_names(self) -> list[str]:

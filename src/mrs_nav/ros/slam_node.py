@@ -17,8 +17,10 @@ when tf knows it, else dropped with a throttled warning. The map is reset only b
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import threading
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -28,16 +30,17 @@ from nav_msgs.msg import MapMetaData, OccupancyGrid
 from sensor_msgs.msg import LaserScan
 from std_srvs.srv import Empty, EmptyRequest, EmptyResponse
 
+from mrs_nav.config_files import node_default
 from mrs_nav.errors import MrsNavError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.ros.conversions import any_reading, pose_msg, scan_data
 from mrs_nav.ros.map_odom import MapOdomBroadcaster, check_timing, lookup_pose, tf_state
 from mrs_nav.ros.navigation_conversions import publish_unless_shutdown
-from mrs_nav.ros.params import private_param
+from mrs_nav.ros.params import private_params
 from mrs_nav.slam import Slam, SlamConfig
 
-# Parameters of SlamConfig the node reads (gmapping's names where gmapping has them).
-_SLAM_PARAMS = tuple(f.name for f in dataclasses.fields(SlamConfig))
+NODE = "slam"
+_default = functools.partial(node_default, NODE)
 _TF_ERRORS = (tf2_ros.LookupException, tf2_ros.ConnectivityException, tf2_ros.ExtrapolationException)
 _TIME_JUMP = 1.0  # s: the clock this much behind its last reading means sim time went back (a bag restarted)
 
@@ -47,26 +50,27 @@ class SlamNodeConfig:
     """The node's private parameters: frames, timing, and the core :class:`SlamConfig`."""
 
     slam: SlamConfig
-    base_frame: str = "base_footprint"
-    odom_frame: str = "odom"
-    map_frame: str = "map"
-    transform_publish_period: float = 0.05
-    tf_wait: float = 0.2
+    base_frame: str = _default("base_frame")
+    odom_frame: str = _default("odom_frame")
+    map_frame: str = _default("map_frame")
+    transform_publish_period: float = _default("transform_publish_period")
+    tf_wait: float = _default("tf_wait")
 
     def __post_init__(self) -> None:
         check_timing(self.transform_publish_period, tf_wait=self.tf_wait)
 
     @classmethod
     def from_params(cls) -> SlamNodeConfig:
-        """Read the ``~`` parameters once (defaults in config/slam.yaml); bad values raise InvalidInputError."""
-        values = {name: rospy.get_param(f"~{name}") for name in _SLAM_PARAMS if rospy.has_param(f"~{name}")}
+        """Read the ``~`` parameters once (defaults: config/slam.yaml); bad values raise InvalidInputError."""
+        return cls.from_values(private_params(NODE))
+
+    @classmethod
+    def from_values(cls, values: Mapping[str, Any]) -> SlamNodeConfig:
+        """The config from every parameter of config/slam.yaml by name."""
+        own = {f.name for f in dataclasses.fields(cls)} - {"slam"}
         return cls(
-            slam=SlamConfig.from_mapping(values),
-            base_frame=private_param("base_frame", "base_footprint"),
-            odom_frame=private_param("odom_frame", "odom"),
-            map_frame=private_param("map_frame", "map"),
-            transform_publish_period=private_param("transform_publish_period", 0.05),
-            tf_wait=private_param("tf_wait", 0.2),
+            slam=SlamConfig.from_mapping({k: v for k, v in values.items() if k not in own}),
+            **{name: values[name] for name in own},
         )
 
 

@@ -7,26 +7,34 @@ one. (Debian 12 packages topic_tools' binaries without the package manifest rosl
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import rospy
 from tf2_msgs.msg import TFMessage
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.ros.navigation_conversions import publish_unless_shutdown
-from mrs_nav.ros.params import private_param
+from mrs_nav.ros.params import private_params
+
+NODE = "tf_filter"
 
 
 @dataclass(frozen=True)
 class TfFilterConfig:
     """The node's private parameters: the parent frames whose transforms are dropped (comma-separated in
-    ``~drop_parents``, default ``map``)."""
+    ``~drop_parents``; default: config/tf_filter.yaml)."""
 
-    drop_parents: frozenset[str] = frozenset({"map"})
+    drop_parents: frozenset[str]
 
     @classmethod
     def from_params(cls) -> TfFilterConfig:
-        names = frozenset(n.strip().lstrip("/") for n in private_param("drop_parents", "map").split(",") if n.strip())
+        return cls.from_values(private_params(NODE))
+
+    @classmethod
+    def from_values(cls, values: Mapping[str, Any]) -> TfFilterConfig:
+        names = frozenset(n.strip().lstrip("/") for n in values["drop_parents"].split(",") if n.strip())
         if not names:
             raise InvalidInputError("~drop_parents: name at least one frame")
         return cls(names)

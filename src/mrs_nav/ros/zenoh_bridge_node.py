@@ -56,9 +56,11 @@ from mrs_nav.bridge.wire import (
     schema_of,
     stamp_attachment,
 )
+from mrs_nav.config_files import node_defaults
 from mrs_nav.errors import MrsNavError
 from mrs_nav.textfiles import load_yaml, read_text
 
+NODE = "zenoh_bridge"
 # Messages dropped by the inbound checks are logged at most once per this many seconds (with a count).
 DROP_LOG_PERIOD = 5.0
 # Discovery ticks a bridged topic may go without our registration at the master or a connection to any of its
@@ -67,9 +69,10 @@ SUSPECT_TICKS = 3
 
 
 def load_config() -> BridgeConfig:
-    """Private parameters, overridden by the YAML file named in ``~config_file`` when given."""
-    params: dict[str, Any] = dict(rospy.get_param("~", {}))
-    path = str(params.pop("config_file", "") or "")
+    """Private parameters (defaults: config/zenoh_bridge.yaml), overridden by the YAML file named in
+    ``~config_file`` when given."""
+    params: dict[str, Any] = {**node_defaults(NODE), **rospy.get_param("~", {})}
+    path = str(params.pop("config_file") or "")
     if path:
         where = f"~config_file {path}"
         loaded = load_yaml(read_text(Path(path), MAX_FILE_BYTES, "~config_file"), where) or {}

@@ -1,9 +1,9 @@
 """SLAM parameters, named and meant as in ROS gmapping (``slam_gmapping``) where the meaning is the same.
 
-Units: metres, radians, seconds. One set of defaults: ``config/slam.yaml``, which the SLAM node loads as its
-private parameters and :class:`SlamConfig` reads for its field defaults, so the node, ``mrs-nav replay`` and
-the benchmarks start from the same values. Range-dependent choices follow the scan: the usable range is the
-scan's own ``range_max``, capped by ``maxUrange`` (0: no cap).
+Units: metres, radians, seconds. One set of defaults: ``config/slam.yaml`` (:mod:`mrs_nav.config_files`), which
+the SLAM node reads for its private parameters' defaults and :class:`SlamConfig` for its field defaults, so the
+node, ``mrs-nav replay`` and the benchmarks start from the same values. Range-dependent choices follow the
+scan: the usable range is the scan's own ``range_max``, capped by ``maxUrange`` (0: no cap).
 
 Every value is checked against the stated range in :data:`LIMITS` (a value outside raises
 :class:`InvalidInputError` naming it), and the initial map extent against :data:`MAX_MAP_CELLS`, before
@@ -19,12 +19,9 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-import yaml
-
+from mrs_nav.config_files import node_default
 from mrs_nav.errors import InvalidInputError
-from mrs_nav.resources import CONFIG_DIR
 
-DEFAULTS_FILE = CONFIG_DIR / "slam.yaml"
 # Cells the occupancy grid may span at most, e.g. 1.4 km x 1.4 km at 20 cm or 350 m x 350 m at 5 cm (the MIT
 # Infinite Corridor map spans 49 M, its 1941 scans all processed). The map grows only where scans reach; past this
 # it refuses. Memory follows the cells scans reached (mrs_nav.slam.grid: 4 bytes a cell, 12 more near end points;
@@ -59,23 +56,7 @@ LIMITS: dict[builtins.str, tuple[float, float]] = {
 }
 
 
-@functools.cache
-def shipped_defaults() -> dict[builtins.str, Any]:
-    """The SLAM parameters of ``config/slam.yaml`` (the node's frames and timing there are not SLAM's)."""
-    try:
-        values = yaml.safe_load(DEFAULTS_FILE.read_text(encoding="utf-8"))
-    except (OSError, yaml.YAMLError) as err:
-        raise InvalidInputError(f"cannot read the SLAM defaults {DEFAULTS_FILE}: {err}") from None
-    if not isinstance(values, dict):
-        raise InvalidInputError(f"SLAM defaults {DEFAULTS_FILE} is not a mapping")
-    return values
-
-
-def _default(name: builtins.str) -> Any:
-    values = shipped_defaults()
-    if name not in values:
-        raise InvalidInputError(f"SLAM defaults {DEFAULTS_FILE} lack {name}")
-    return values[name]
+_default = functools.partial(node_default, "slam")
 
 
 @dataclass(frozen=True)

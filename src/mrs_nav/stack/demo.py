@@ -17,7 +17,6 @@ trajectory error of the SLAM pose and the map's agreement with the world.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from collections import deque
@@ -28,8 +27,8 @@ from typing import Protocol
 
 import matplotlib
 import numpy as np
-import yaml
 
+from mrs_nav.config_files import node_default
 from mrs_nav.control.path_following import cross_track_distance
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D
@@ -46,20 +45,7 @@ from mrs_nav.stack.track import BoundedTrack
 matplotlib.use("Agg")  # headless: figures are files, never windows
 import matplotlib.pyplot as plt
 
-from mrs_nav.resources import CONFIG_DIR
-
 MAX_PATHS_KEPT = 500  # adopted plans kept for the figure (a demo's few goals adopt far fewer)
-
-
-def node_slam_config() -> SlamConfig:
-    """The SLAM parameters of the SLAM node (``config/slam.yaml`` of the checkout), so the demo maps as the live
-    system does; the core defaults when the file is not there."""
-    path = CONFIG_DIR / "slam.yaml"
-    if not path.is_file():
-        return SlamConfig(maxUrange=3.0)
-    values = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
-    known = {f.name for f in dataclasses.fields(SlamConfig)}
-    return SlamConfig.from_mapping({k: v for k, v in values.items() if k in known})
 
 
 @dataclass(frozen=True)
@@ -76,8 +62,8 @@ class DemoConfig:
     plan_time_budget_s: float | None = 0.25
     plan_iterations: int | None = None
     navigator: NavigatorConfig = field(default_factory=NavigatorConfig)
-    slam: SlamConfig = field(default_factory=node_slam_config)
-    odom_noise: float = 0.01  # as the simulator node's default (config/simulator.yaml)
+    slam: SlamConfig = field(default_factory=SlamConfig)  # the SLAM node's defaults (config/slam.yaml)
+    odom_noise: float = node_default("simulator", "odom_noise")  # as the simulator node's (config/simulator.yaml)
 
     @property
     def map_period(self) -> float:
