@@ -5,6 +5,7 @@ Errors become :class:`mrs_nav.errors.BagError` naming the bag (and the topic whe
 
 from __future__ import annotations
 
+import contextlib
 import functools
 from collections.abc import Iterable, Iterator
 from pathlib import Path
@@ -14,6 +15,7 @@ from typing import Any
 from rosbags.rosbag1 import Reader, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
+from mrs_nav.atomic_write import atomic_path
 from mrs_nav.errors import BagError
 
 TF_MESSAGE = "tf2_msgs/msg/TFMessage"
@@ -37,26 +39,39 @@ class BagWriter:
 
     def __init__(self, path: Path, *, compress: bool = True) -> None:
         self.path = path
-        self._writer = Writer(path)
-        if compress:
-            self._writer.set_compression(Writer.CompressionFormat.BZ2)  # must precede open()
+        self._compress = compress
         self._connections: dict[str, Any] = {}
+        self._writer: Writer | None = None
+        self._open = contextlib.ExitStack()
 
     def __enter__(self) -> BagWriter:
-        try:
-            self.path.unlink(missing_ok=True)
-            self._writer.open()
-        except Exception as err:
-            raise BagError(f"cannot create bag {self.path}: {err}") from None
+        """Open a temporary bag beside :attr:`path`; it replaces :attr:`path` only when the block succeeds
+        (:func:`mrs_nav.atomic_write.atomic_path`), so an existing bag is replaced only by a whole new one."""
+        with contextlib.ExitStack() as stack:
+            temp = stack.enter_context(atomic_path(self.path, "bag"))
+            writer = Writer(temp)
+            if self._compress:
+                writer.set_compression(Writer.CompressionFormat.BZ2)  # must precede open()
+            try:
+                writer.open()
+            except OSError:
+                raise  # atomic_path names the bag and the system's reason
+            except Exception as err:
+                raise BagError(f"cannot create bag {self.path}: {err}") from None
+            stack.callback(writer.close)  # runs before the rename: the index is written first
+            self._writer = writer
+            self._open = stack.pop_all()
         return self
 
     def __exit__(
         self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
     ) -> None:
-        self._writer.close()
+        self._open.__exit__(exc_type, exc, tb)
 
     def write(self, topic: str, msgtype: str, stamp_ns: int, message: Any, *, latching: bool = False) -> None:
         """Append ``message`` (a rosbags message object of ``msgtype``) on ``topic`` at ``stamp_ns``."""
+        if self._writer is None:
+            raise BagError(f"bag {self.path} is not open (use BagWriter as a context manager)")
         store = typestore()
         conn = self._connections.get(topic)
         if conn is None:
