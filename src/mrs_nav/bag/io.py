@@ -16,6 +16,7 @@ from rosbags.rosbag1 import Reader, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from mrs_nav.atomic_write import atomic_path
+from mrs_nav.bag.definitions import connection_store
 from mrs_nav.errors import BagError
 
 TF_MESSAGE = "tf2_msgs/msg/TFMessage"
@@ -92,7 +93,9 @@ def bag_topics(path: Path) -> dict[str, str]:
 def read_messages(path: Path, topics: Iterable[str], *, required: Iterable[str] = ()) -> Iterator[tuple[str, int, Any]]:
     """Yield ``(topic, bag time ns, message)`` for ``topics`` in time order.
 
-    Raises :class:`BagError` when the bag cannot be read or lacks one of the ``required`` topics.
+    Each connection is decoded as it was written (:func:`mrs_nav.bag.definitions.connection_store`). Raises
+    :class:`BagError` when the bag cannot be read, lacks one of the ``required`` topics or holds a connection
+    whose definition mrs_nav cannot read.
     """
     wanted = set(topics)
     store = typestore()
@@ -112,9 +115,10 @@ def read_messages(path: Path, topics: Iterable[str], *, required: Iterable[str] 
                 raise BagError(f"bag {path}: topic {conn.topic} has type {conn.msgtype}, which mrs_nav cannot read")
         if not connections:  # rosbags reads every connection when given none
             return
+        stores = {conn.id: connection_store(conn, store, path) for conn in connections}
         try:
             for conn, stamp, raw in reader.messages(connections=connections):
-                yield conn.topic, stamp, store.deserialize_ros1(raw, conn.msgtype)
+                yield conn.topic, stamp, stores[conn.id].deserialize_ros1(raw, conn.msgtype)
         except BagError:
             raise
         except Exception as err:
