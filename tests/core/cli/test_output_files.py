@@ -136,6 +136,7 @@ def test_plan_png_onto_a_device_is_refused():
 def test_replay_golden_onto_a_device_is_refused(tmp_path):
     result = mrs_nav("replay", str(SIMPLE_BAG), "--slam", "--out", str(tmp_path), "--write-golden", "/dev/full")
     assert_one_error(result, "/dev/full")
+    assert not (tmp_path / "metrics.json").exists()  # refused before the replay
 
 
 def mounted(tmp_path: Path, args: list[str], setup: str, listed: Path, user: str = ""):
