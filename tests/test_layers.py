@@ -20,6 +20,7 @@ RANKS: dict[str, int] = {
     "resources": 1,
     "limits": 1,
     "textfiles": 1,
+    "atomic_write": 1,
     "jit": 1,
     "planning": 2,
     "motion_model": 2,

@@ -27,3 +27,7 @@ class BagError(MrsNavError):
 
 class NoPathFoundError(MrsNavError):
     """A planner used its budget without reaching the goal."""
+
+
+class OutputFileError(MrsNavError):
+    """An output cannot be written (full disk, read-only folder, no permission) or would overwrite an input."""

@@ -123,6 +123,8 @@ def check_writable(path: Path, what: str, *, folder: bool = False) -> Path:
         raise InvalidInputError(f"{what}: {path} is a folder, expected a file name")
     if not folder and (path.is_fifo() or path.is_socket()):  # writing would wait for a reader, maybe for ever
         raise InvalidInputError(f"{what}: {path} is a FIFO or a socket, expected a file name")
+    if not folder and path.exists() and not path.is_file():  # a device: outputs are renamed over their name
+        raise InvalidInputError(f"{what}: {path} is a device, expected a file name")
     try:
         target.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=target):

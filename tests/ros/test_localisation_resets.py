@@ -184,3 +184,29 @@ def test_a_pose_estimate_off_the_map_is_refused_with_one_short_warning(node: Nod
     assert "(1e+300, 1e+300) m lies off the map" in warning
     assert len(warning) < 200
     assert not any(m.startswith("localisation: initial pose (1e+300") for m in node.logged)
+
+
+def test_scans_in_frames_tf_cannot_name_give_one_throttled_warning(node: NodeUnderTest) -> None:
+    """A frame ``""`` or ``"/base_scan"`` (tf2 takes neither): skipped with a warning, never an error per scan."""
+    from rosgraph_msgs.msg import Log
+
+    rospy = node.rospy
+    lines: list[tuple[int, str]] = []
+    sub = rospy.Subscriber(
+        "/rosout", Log, lambda m: lines.append((m.level, m.msg)) if m.name == "/amcl" else None, queue_size=100
+    )
+    begun = node.robot.now
+    wait_for(lambda: node.robot.now > begun + 6.0, 30.0, "the throttle of earlier warnings to pass")
+    for frame in ("", "/base_scan") * 3:
+        scan = scan_at(START, node.robot.now)
+        scan.header.frame_id = frame
+        node.scans.publish(scan)
+        sent = node.robot.now
+        wait_for(lambda sent=sent: node.robot.now > sent + 0.2, 30.0, "0.2 s between scans")
+    last = node.robot.now
+    wait_for(lambda: any("skipping scan" in m for _, m in lines), 30.0, "the warning")
+    wait_for(lambda: node.robot.now > last + 1.0, 30.0, "a second more")
+    sub.unregister()
+    assert [m for level, m in lines if level >= Log.ERROR] == []
+    warnings = [m for level, m in lines if level == Log.WARN and "skipping scan" in m]
+    assert len(warnings) == 1, warnings

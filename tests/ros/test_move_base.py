@@ -107,6 +107,17 @@ def test_goals_with_headings_succeed_within_the_tolerances(arena: dict[str, Any]
     assert truth.contacts == 0
 
 
+def test_a_goal_with_the_all_zero_quaternion_asks_for_no_heading(arena: dict[str, Any]) -> None:
+    from actionlib_msgs.msg import GoalStatus
+
+    rospy, truth, client = arena["rospy"], arena["truth"], arena["client"]
+    goal = target(rospy, -1.3, -1.2, 0.0)
+    goal.target_pose.pose.orientation.w = 0.0  # x = y = z = w = 0: a goal sent without a heading
+    client.send_goal(goal)
+    assert wait_result(arena) == GoalStatus.SUCCEEDED, client.get_goal_status_text()
+    assert_reached(rospy, truth, -1.3, -1.2)
+
+
 def test_cancel_stops_the_robot_within_half_a_second(arena: dict[str, Any]) -> None:
     from actionlib_msgs.msg import GoalStatus
 

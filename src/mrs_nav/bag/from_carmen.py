@@ -28,13 +28,13 @@ whose first scan is stamped before 0 is shifted to start there, with a note.
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from mrs_nav.atomic_write import check_not_inputs
 from mrs_nav.bag.carmen import MAX_STAMP_S, CarmenLog, CarmenScan, read_log
 from mrs_nav.bag.io import BagWriter
 from mrs_nav.bag.messages import LASER_SCAN, ODOMETRY, laser_scan_message, odometry_message, tf_message
@@ -90,47 +90,16 @@ def carmen_to_bag(
         raise InvalidInputError(f"odometry scale {odom_scale}: each factor must be in {low:g}..{high:g}")
     if noise is not None and odom_scale != (1.0, 1.0):
         raise InvalidInputError("the odometry scale applies to the log's odometry only, not to synthetic odometry")
+    check_not_inputs([("bag", bag)], [("CARMEN log", log)])
     content = read_log(log)
     scans = content.scans
     if not scans:
         raise InvalidInputError(f"CARMEN log {log} has no FLASER lines")
     notes: list[str] = []
-    logged = [s.timestamp for s in scans]
-    stamps, restamped, interval = repaired_stamps(logged)
-    timed = restamped <= MAX_RESTAMPED_FRACTION * len(scans)
-    if not timed:
-        stamps = [i * FALLBACK_INTERVAL_S for i in range(len(scans))]
-        notes.append(
-            f"{log}: {restamped} of {len(scans)} scans were stamped at or before the previous scan, so the log's "
-            f"stamps carry no timing: every scan restamped {FALLBACK_INTERVAL_S:g} s after the previous one, "
-            "odometry written at the scans only"
-        )
-    elif restamped:
-        notes.append(
-            f"{log}: {restamped} of {len(scans)} scans were stamped at or before the previous scan; restamped "
-            f"evenly between their good neighbours (at the end of the log: {interval:.3f} s apart, the median "
-            "increasing interval)"
-        )
-    if noise is None and content.odom_lines == 0:
-        notes.append(f"{log}: no ODOM lines; odometry synthesised from the logged poses with the default noise")
-        noise = OdometryNoise.of(DEFAULT_ALPHAS)
-    elif noise is None and content.gaps > MAX_GAP_FRACTION * (len(scans) - 1):
-        notes.append(
-            f"{log}: {content.gaps} of {len(scans)} scans have no odometry since the previous scan (the ODOM lines "
-            "only repeat the scans' poses); odometry synthesised from the logged poses with the default noise"
-        )
-        noise = OdometryNoise.of(DEFAULT_ALPHAS)
-    between: list[list[tuple[float, Pose2D]]] = [[] for _ in scans]
-    if noise is None:
-        odom, between = log_odometry(content, stamps, odom_scale)
-        if not timed:  # the ODOM lines' own stamps cannot be placed among the new ones
-            between = [[] for _ in scans]
-        kind = "log"
-        if content.gaps:
-            notes.append(f"{log}: {content.gaps} scans have no odometry since the previous scan; odometry held there")
-    else:
-        odom = noisy_odometry([s.pose for s in scans], noise, np.random.default_rng(seed))
-        kind = "synthetic"
+    stamps, timed = _scan_stamps(log, scans, notes)
+    kind, odom, between = _odometry(
+        log, content, stamps, timed=timed, noise=noise, seed=seed, odom_scale=odom_scale, notes=notes
+    )
     if stamps[-1] - stamps[0] >= MAX_STAMP_S:
         raise InvalidInputError(f"CARMEN log {log}: its scans span more than 2^32 s, beyond ROS time")
     if stamps[-1] >= MAX_STAMP_S:
@@ -153,6 +122,61 @@ def carmen_to_bag(
         raise InvalidInputError(f"CARMEN log {log}: every range is 0, so the laser's range limit is unknown")
     _write(bag, scans, stamps, (odom, between), limit=limit, progress=progress)
     return ConversionSummary(len(scans), stamps[-1] - stamps[0], kind, tuple(notes))
+
+
+def _scan_stamps(log: Path, scans: list[CarmenScan], notes: list[str]) -> tuple[list[float], bool]:
+    """The scans' repaired stamps (:func:`repaired_stamps`), and whether the log's stamps carry timing at all
+    (if not, the scans are restamped :data:`FALLBACK_INTERVAL_S` apart); what was done is added to ``notes``."""
+    stamps, restamped, interval = repaired_stamps([s.timestamp for s in scans])
+    timed = restamped <= MAX_RESTAMPED_FRACTION * len(scans)
+    if not timed:
+        stamps = [i * FALLBACK_INTERVAL_S for i in range(len(scans))]
+        notes.append(
+            f"{log}: {restamped} of {len(scans)} scans were stamped at or before the previous scan, so the log's "
+            f"stamps carry no timing: every scan restamped {FALLBACK_INTERVAL_S:g} s after the previous one, "
+            "odometry written at the scans only"
+        )
+    elif restamped:
+        notes.append(
+            f"{log}: {restamped} of {len(scans)} scans were stamped at or before the previous scan; restamped "
+            f"evenly between their good neighbours (at the end of the log: {interval:.3f} s apart, the median "
+            "increasing interval)"
+        )
+    return stamps, timed
+
+
+def _odometry(
+    log: Path,
+    content: CarmenLog,
+    stamps: list[float],
+    *,
+    timed: bool,
+    noise: OdometryNoise | None,
+    seed: int,
+    odom_scale: tuple[float, float],
+    notes: list[str],
+) -> tuple[str, list[Pose2D], list[list[tuple[float, Pose2D]]]]:
+    """``(kind, odometry at the scans, odometry between them)``: the log's own, or synthetic when ``noise`` is
+    given or the log's odometry is missing or mostly gaps; what was done is added to ``notes``."""
+    scans = content.scans
+    if noise is None and content.odom_lines == 0:
+        notes.append(f"{log}: no ODOM lines; odometry synthesised from the logged poses with the default noise")
+        noise = OdometryNoise.of(DEFAULT_ALPHAS)
+    elif noise is None and content.gaps > MAX_GAP_FRACTION * (len(scans) - 1):
+        notes.append(
+            f"{log}: {content.gaps} of {len(scans)} scans have no odometry since the previous scan (the ODOM lines "
+            "only repeat the scans' poses); odometry synthesised from the logged poses with the default noise"
+        )
+        noise = OdometryNoise.of(DEFAULT_ALPHAS)
+    if noise is not None:
+        odom = noisy_odometry([s.pose for s in scans], noise, np.random.default_rng(seed))
+        return "synthetic", odom, [[] for _ in scans]
+    odom, between = log_odometry(content, stamps, odom_scale)
+    if not timed:  # the ODOM lines' own stamps cannot be placed among the new ones
+        between = [[] for _ in scans]
+    if content.gaps:
+        notes.append(f"{log}: {content.gaps} scans have no odometry since the previous scan; odometry held there")
+    return "log", odom, between
 
 
 def no_return_limit(scans: list[CarmenScan]) -> tuple[float, int]:
@@ -233,40 +257,29 @@ def _write(
     limit: float,
     progress: Callable[[int], None] | None,
 ) -> None:
-    """Write to a partial file beside ``bag`` and move it over ``bag`` when complete: an existing bag is
-    replaced only by a whole new one."""
-    if bag.is_dir():
-        raise InvalidInputError(f"bag {bag} is a directory")
-    partial = bag.with_name(f".{bag.name}.partial")
-    try:
-        partial.unlink(missing_ok=True)
-        with BagWriter(partial) as writer:
-            first = stamps[0]
-            writer.write(
-                "/tf_static",
-                TF,
-                _ns(first),
-                tf_message(Pose2D(0.0, 0.0, 0.0), first, "base_footprint", "base_scan"),
-                latching=True,
-            )
-            odom_seq = 0
-            for seq, (scan, t, pose, between) in enumerate(zip(scans, stamps, *odometry, strict=True)):
-                for odom_t, odom_pose in [*between, (t, pose)]:
-                    msg = odometry_message(odom_pose, odom_t, "odom", "base_footprint", odom_seq)
-                    writer.write("/odom", ODOMETRY, _ns(odom_t), msg)
-                    writer.write("/tf", TF, _ns(odom_t), tf_message(odom_pose, odom_t, "odom", "base_footprint"))
-                    odom_seq += 1
-                data = LaserScanData(scan.angle_min, scan.angle_increment, 0.0, limit, scan.ranges)
-                truth = odometry_message(scan.pose, t, "map", "base_footprint", seq)
-                writer.write("/ground_truth/odom", ODOMETRY, _ns(t), truth)
-                writer.write("/scan", LASER_SCAN, _ns(t), laser_scan_message(data, t, "base_scan", seq))
-                if progress is not None:
-                    progress(1)
-        os.replace(partial, bag)
-    except OSError as err:
-        raise InvalidInputError(f"cannot write bag {bag}: {err}") from None
-    finally:
-        partial.unlink(missing_ok=True)
+    """Write the bag; an existing bag is replaced only by a whole new one (:class:`BagWriter`)."""
+    with BagWriter(bag) as writer:
+        first = stamps[0]
+        writer.write(
+            "/tf_static",
+            TF,
+            _ns(first),
+            tf_message(Pose2D(0.0, 0.0, 0.0), first, "base_footprint", "base_scan"),
+            latching=True,
+        )
+        odom_seq = 0
+        for seq, (scan, t, pose, between) in enumerate(zip(scans, stamps, *odometry, strict=True)):
+            for odom_t, odom_pose in [*between, (t, pose)]:
+                msg = odometry_message(odom_pose, odom_t, "odom", "base_footprint", odom_seq)
+                writer.write("/odom", ODOMETRY, _ns(odom_t), msg)
+                writer.write("/tf", TF, _ns(odom_t), tf_message(odom_pose, odom_t, "odom", "base_footprint"))
+                odom_seq += 1
+            data = LaserScanData(scan.angle_min, scan.angle_increment, 0.0, limit, scan.ranges)
+            truth = odometry_message(scan.pose, t, "map", "base_footprint", seq)
+            writer.write("/ground_truth/odom", ODOMETRY, _ns(t), truth)
+            writer.write("/scan", LASER_SCAN, _ns(t), laser_scan_message(data, t, "base_scan", seq))
+            if progress is not None:
+                progress(1)
 
 
 def _ns(seconds: float) -> int:

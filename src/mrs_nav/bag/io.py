@@ -5,6 +5,7 @@ Errors become :class:`mrs_nav.errors.BagError` naming the bag (and the topic whe
 
 from __future__ import annotations
 
+import contextlib
 import functools
 from collections.abc import Iterable, Iterator
 from pathlib import Path
@@ -14,6 +15,8 @@ from typing import Any
 from rosbags.rosbag1 import Reader, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
+from mrs_nav.atomic_write import atomic_path
+from mrs_nav.bag.definitions import connection_store
 from mrs_nav.errors import BagError
 
 TF_MESSAGE = "tf2_msgs/msg/TFMessage"
@@ -37,26 +40,39 @@ class BagWriter:
 
     def __init__(self, path: Path, *, compress: bool = True) -> None:
         self.path = path
-        self._writer = Writer(path)
-        if compress:
-            self._writer.set_compression(Writer.CompressionFormat.BZ2)  # must precede open()
+        self._compress = compress
         self._connections: dict[str, Any] = {}
+        self._writer: Writer | None = None
+        self._open = contextlib.ExitStack()
 
     def __enter__(self) -> BagWriter:
-        try:
-            self.path.unlink(missing_ok=True)
-            self._writer.open()
-        except Exception as err:
-            raise BagError(f"cannot create bag {self.path}: {err}") from None
+        """Open a temporary bag beside :attr:`path`; it replaces :attr:`path` only when the block succeeds
+        (:func:`mrs_nav.atomic_write.atomic_path`), so an existing bag is replaced only by a whole new one."""
+        with contextlib.ExitStack() as stack:
+            temp = stack.enter_context(atomic_path(self.path, "bag"))
+            writer = Writer(temp)
+            if self._compress:
+                writer.set_compression(Writer.CompressionFormat.BZ2)  # must precede open()
+            try:
+                writer.open()
+            except OSError:
+                raise  # atomic_path names the bag and the system's reason
+            except Exception as err:
+                raise BagError(f"cannot create bag {self.path}: {err}") from None
+            stack.callback(writer.close)  # runs before the rename: the index is written first
+            self._writer = writer
+            self._open = stack.pop_all()
         return self
 
     def __exit__(
         self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
     ) -> None:
-        self._writer.close()
+        self._open.__exit__(exc_type, exc, tb)
 
     def write(self, topic: str, msgtype: str, stamp_ns: int, message: Any, *, latching: bool = False) -> None:
         """Append ``message`` (a rosbags message object of ``msgtype``) on ``topic`` at ``stamp_ns``."""
+        if self._writer is None:
+            raise BagError(f"bag {self.path} is not open (use BagWriter as a context manager)")
         store = typestore()
         conn = self._connections.get(topic)
         if conn is None:
@@ -77,7 +93,9 @@ def bag_topics(path: Path) -> dict[str, str]:
 def read_messages(path: Path, topics: Iterable[str], *, required: Iterable[str] = ()) -> Iterator[tuple[str, int, Any]]:
     """Yield ``(topic, bag time ns, message)`` for ``topics`` in time order.
 
-    Raises :class:`BagError` when the bag cannot be read or lacks one of the ``required`` topics.
+    Each connection is decoded as it was written (:func:`mrs_nav.bag.definitions.connection_store`). Raises
+    :class:`BagError` when the bag cannot be read, lacks one of the ``required`` topics or holds a connection
+    whose definition mrs_nav cannot read.
     """
     wanted = set(topics)
     store = typestore()
@@ -97,9 +115,10 @@ def read_messages(path: Path, topics: Iterable[str], *, required: Iterable[str] 
                 raise BagError(f"bag {path}: topic {conn.topic} has type {conn.msgtype}, which mrs_nav cannot read")
         if not connections:  # rosbags reads every connection when given none
             return
+        stores = {conn.id: connection_store(conn, store, path) for conn in connections}
         try:
             for conn, stamp, raw in reader.messages(connections=connections):
-                yield conn.topic, stamp, store.deserialize_ros1(raw, conn.msgtype)
+                yield conn.topic, stamp, stores[conn.id].deserialize_ros1(raw, conn.msgtype)
         except BagError:
             raise
         except Exception as err:

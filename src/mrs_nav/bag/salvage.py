@@ -25,6 +25,7 @@ from typing import Any, BinaryIO
 from lz4.frame import decompress as lz4_decompress  # type: ignore[import-untyped]
 from rosbags.rosbag1 import Writer, WriterError
 
+from mrs_nav.atomic_write import atomic_path
 from mrs_nav.errors import BagError
 
 MAGIC = b"#ROSBAG V2.0\n"
@@ -153,20 +154,17 @@ def _collect(
 
 
 def _write(output: Path, connections: dict[int, _Connection], messages: list[tuple[int, int, bytes]]) -> None:
-    try:
-        output.parent.mkdir(parents=True, exist_ok=True)
-        output.unlink(missing_ok=True)
-        writer = Writer(output)
+    """Write the rebuilt bag whole or not at all (:func:`mrs_nav.atomic_write.atomic_path`)."""
+    with atomic_path(output, "rebuilt bag") as temp:
+        writer = Writer(temp)
         writer.open()
-    except OSError as err:
-        raise BagError(f"cannot write the rebuilt bag {output}: {err.strerror}") from None
-    try:
-        _write_records(writer, connections, messages)
-    except (WriterError, ValueError, KeyError) as err:
-        # connection records that parsed but that rosbags cannot write (a damaged type name or md5)
-        raise BagError(f"cannot rebuild bag into {output}: a connection record is damaged ({err})") from None
-    finally:
-        writer.close()
+        try:
+            _write_records(writer, connections, messages)
+        except (WriterError, ValueError, KeyError) as err:
+            # connection records that parsed but that rosbags cannot write (a damaged type name or md5)
+            raise BagError(f"cannot rebuild bag into {output}: a connection record is damaged ({err})") from None
+        finally:
+            writer.close()
 
 
 def _write_records(writer: Writer, connections: dict[int, _Connection], messages: list[tuple[int, int, bytes]]) -> None:

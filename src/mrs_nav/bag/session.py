@@ -116,7 +116,6 @@ class SessionBag:
     def __init__(self, path: Path, laser: LaserParams, *, compress: bool = True) -> None:
         self.bag_path = path
         self.laser = laser
-        path.unlink(missing_ok=True)  # a rerun replaces its bag (rosbags' writer refuses to overwrite)
         self._writer = BagWriter(path, compress=compress)
         self._last_clock = -1.0
 

@@ -14,6 +14,7 @@ import argparse
 import signal
 from pathlib import Path
 
+from mrs_nav.atomic_write import write_text
 from mrs_nav.bench.bridge import Receiver
 from mrs_nav.bridge.session import open_client_session
 
@@ -35,7 +36,7 @@ def main(argv: list[str] | None = None) -> int:
         pass
     finally:
         session.close()  # type: ignore[no-untyped-call]
-    Path(args.out).write_text(receiver.received().to_json(), encoding="utf-8")
+    write_text(args.out, receiver.received().to_json(), "bench subscriber results")
     return 0
 
 

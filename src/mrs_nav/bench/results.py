@@ -12,6 +12,7 @@ import platform
 import re
 from pathlib import Path
 
+from mrs_nav.atomic_write import write_text
 from mrs_nav.resources import CHECKOUT
 from mrs_nav.tables import markdown_table
 
@@ -63,5 +64,4 @@ def write_section(name: str, body: str, path: Path | None = None) -> Path:
     )
     pattern = re.compile(rf"<!-- bench:{re.escape(name)} -->.*?<!-- /bench:{re.escape(name)} -->\n", re.S)
     text = pattern.sub(lambda _: section, text) if pattern.search(text) else text.rstrip("\n") + "\n\n" + section
-    path.write_text(text, encoding="utf-8")
-    return path
+    return write_text(path, text, "benchmark results")

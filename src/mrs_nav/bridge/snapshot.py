@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
+from mrs_nav.atomic_write import atomic_path
 from mrs_nav.bridge.dashboard import path_xy, pose_of
 
 
@@ -44,8 +45,8 @@ def draw_snapshot(out: Path, views: Mapping[str, RobotView]) -> Path:
             ax.set_title(name)
     for ax in axes[len(views) :]:
         ax.set_axis_off()
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, format="png")
+    with atomic_path(out, "snapshot") as temp:
+        fig.savefig(temp, format="png")
     return out
 
 

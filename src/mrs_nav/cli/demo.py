@@ -9,6 +9,7 @@ from typing import Any
 
 from tqdm import tqdm
 
+from mrs_nav.atomic_write import check_not_inputs
 from mrs_nav.bag.session import SessionBag
 from mrs_nav.cli.common import print_json
 from mrs_nav.cli.plan import check_free
@@ -105,6 +106,8 @@ def run(args: argparse.Namespace) -> int:
         planner=args.planner,
         plan_time_budget_s=args.time_budget,
     )
+    outputs = [("--out file", args.out / name) for name in ("session.bag", "map.yaml", "map.pgm", "demo.png")]
+    check_not_inputs(outputs, [("--world", world_path)])
     world = load_world(world_path)
     # A start outside the world or inside an obstacle fails here, before the run, as `plan` fails on it. Goals are
     # the navigator's to refuse on the map SLAM builds, as a click into an obstacle in rviz would be.

@@ -22,10 +22,12 @@ from collections.abc import Sequence
 from types import FrameType
 
 from mrs_nav import __version__
+from mrs_nav.atomic_write import WRITE_ERRNOS
 from mrs_nav.cli.common import fail
 from mrs_nav.errors import MrsNavError
 from mrs_nav.options import Parser
 
+_NAMED_FILE_ERRORS = (PermissionError, FileNotFoundError, IsADirectoryError, NotADirectoryError, FileExistsError)
 SUBCOMMANDS = ("demo", "figures", "plan", "replay", "carmen2bag", "bench", "monitor", "router")
 
 
@@ -82,16 +84,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         return fail(str(err))
     except KeyboardInterrupt as err:
         return fail(f"interrupted ({err})" if err.args else "interrupted", 130)
-    except (PermissionError, FileNotFoundError, IsADirectoryError, NotADirectoryError, FileExistsError) as err:
-        # A file the user named cannot be opened or written: the environment's fault, not a bug.
-        if err.filename is None:
-            raise
-        return fail(f"{err.filename}: {err.strerror}")
     except BrokenPipeError:
         # The reader went away (`mrs-nav plan --json | head`): nothing is wrong with the command. Point stdout at
         # /dev/null so that Python's own flush at exit does not raise again.
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 141
+    except OSError as err:
+        # A file the user named cannot be opened or written, or a disk that fills or a folder that turns
+        # read-only under a writer that did not name its file: the environment's fault, not a bug.
+        named = isinstance(err, _NAMED_FILE_ERRORS) and err.filename is not None
+        if not named and err.errno not in WRITE_ERRNOS:
+            raise
+        return fail(f"{err.filename}: {err.strerror}" if err.filename else f"cannot write: {err.strerror or err}")
     return code
 
 

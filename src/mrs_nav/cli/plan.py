@@ -12,6 +12,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from mrs_nav.atomic_write import check_not_inputs, final_target
 from mrs_nav.cli import tree_planners
 from mrs_nav.cli.common import fail, print_json
 from mrs_nav.errors import InvalidInputError
@@ -24,6 +27,7 @@ from mrs_nav.maps.world import load_world
 from mrs_nav.options import count_option, number_option, parse_floats, radius_option, seed_option
 from mrs_nav.planning import PlanResult
 from mrs_nav.robot import BURGER_RADIUS
+from mrs_nav.textfiles import check_writable
 
 Planner = Callable[[argparse.Namespace, Pose2D, tuple[float, float]], PlanResult]
 
@@ -76,7 +80,14 @@ def plan_with_potential_field(args: argparse.Namespace, start: Pose2D, goal: tup
     bounds = bounds or workspace_bounds(grown, (start.x, start.y), goal)
     field = PotentialField.build(goal, grown, bounds, goal_fade=args.goal_fade)
     settings = EscapeSettings(max_steps=args.max_steps)
-    return plan_potential_field(field, (start.x, start.y, start.yaw), args.seed, settings)
+    result = plan_potential_field(field, (start.x, start.y, start.yaw), args.seed, settings)
+    if args.png is not None:
+        from mrs_nav.figures.potential_field import draw_plan  # noqa: PLC0415 - matplotlib only when drawing
+
+        draw_plan(
+            args.png, obstacles, bounds, start=np.array([start.x, start.y]), goal=np.array(goal), path=result.path
+        )
+    return result
 
 
 PLANNERS: dict[str, Planner] = {
@@ -123,12 +134,27 @@ def register(subparsers: Any) -> None:
         default=EscapeSettings().max_steps,
         help=f"potential field: integration steps, 1..{MAX_ITERATIONS}",
     )
+    parser.add_argument("--png", type=Path, default=None, metavar="FILE.png", help="draw the map, plan and path")
     tree_planners.add_arguments(parser)
     parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
     parser.set_defaults(handler=run)
 
 
+def check_png(args: argparse.Namespace) -> None:
+    """Refuse a ``--png`` that cannot be written, is not a .png name or is one of the inputs, before planning."""
+    png: Path | None = args.png
+    if png is None:
+        return
+    if png.suffix.lower() != ".png":
+        raise InvalidInputError(f"--png {png}: the file name must end in .png (the figure is a PNG image)")
+    final_target(png, "--png")
+    check_writable(png, "--png")
+    named = (("--world", args.world), ("--map", getattr(args, "map", None)), ("--circles", Path(args.circles or "")))
+    check_not_inputs([("--png", png)], [(what, path) for what, path in named if path is not None and path.is_file()])
+
+
 def run(args: argparse.Namespace) -> int:
+    check_png(args)
     start_values = parse_floats(args.start, (2, 3), "--start")
     start = Pose2D(*start_values)
     gx, gy = parse_floats(args.goal, 2, "--goal")

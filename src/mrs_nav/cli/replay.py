@@ -13,12 +13,14 @@ from typing import Any
 
 from tqdm import tqdm
 
+from mrs_nav.atomic_write import check_not_inputs, write_text
 from mrs_nav.cli.common import fail, print_json
 from mrs_nav.options import number_option, runs_option
 from mrs_nav.replay.batch import (
     aggregate,
     find_bags,
     golden_beside,
+    job_outputs,
     markdown_report,
     replay_bag,
     run_jobs,
@@ -114,6 +116,10 @@ def run(args: argparse.Namespace) -> int:
     if len(args.bags) > 1 or args.bags[0].is_dir():
         return _run_batch(args)
     bag = args.bags[0]
+    outputs = [("--out file", path) for path in job_outputs(args.out)]
+    outputs += [("--write-golden", args.write_golden)] if args.write_golden else []
+    named = (("input bag", bag), ("--against", args.against), ("--relations", args.relations))
+    check_not_inputs(outputs, [(what, path) for what, path in named if path is not None])
     if args.cluster:
         print(f"NOTE: --cluster fans out several bags; the one bag {bag} is replayed here", file=sys.stderr)
     job = dataclasses.replace(job_from_args(args, bag, args.out, args.against), reference=args.reference)
@@ -133,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"NOTE: {note}", file=sys.stderr)
     if args.write_golden:
         record = make_golden(bag.name.removesuffix(".active"), _options(args), session.metrics)
-        args.write_golden.write_text(dump_json(record), encoding="utf-8")
+        write_text(args.write_golden, dump_json(record), "--write-golden")
     summary = outcome.summary
     if summary["map_broken"]:
         at_truth = summary.get("doubled_wall_fraction_at_truth")
@@ -184,12 +190,17 @@ def _run_batch(args: argparse.Namespace) -> int:
             "NAME.golden.json beside them"
         )
     bags = find_bags(args.bags)
+    outs = [args.out / bag.name.removesuffix(".active").removesuffix(".bag") for bag in bags]
+    goldens = [golden_beside(bag) for bag in bags]
+    outputs = [("--out file", args.out / name) for name in ("report.json", "report.md")]
+    outputs += [("--out file", path) for out in outs for path in job_outputs(out)]
+    inputs = [("input bag", bag) for bag in bags] + [("golden file", g) for g in goldens if g is not None]
+    check_not_inputs(outputs, inputs)
     check_writable(args.out, "--out", folder=True)
-    jobs = []
-    for bag in bags:
-        out = args.out / bag.name.removesuffix(".active").removesuffix(".bag")
-        golden = golden_beside(bag)
-        jobs.append(golden_job(bag, out, golden) if golden else job_from_args(args, bag, out, None))
+    jobs = [
+        golden_job(bag, out, golden) if golden else job_from_args(args, bag, out, None)
+        for bag, out, golden in zip(bags, outs, goldens, strict=True)
+    ]
     # No monitor thread: the local workers are forked after the bar exists, and only a single-threaded parent
     # forks them (others start them through a fork server, which costs each its imports).
     tqdm.monitor_interval = 0
@@ -201,9 +212,9 @@ def _run_batch(args: argparse.Namespace) -> int:
             bar.close()
     report = aggregate(outcomes)
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "report.json").write_text(dump_json(report), encoding="utf-8")
+    write_text(args.out / "report.json", dump_json(report), "report")
     table = markdown_report(outcomes)
-    (args.out / "report.md").write_text(table, encoding="utf-8")
+    write_text(args.out / "report.md", table, "report")
     if args.json:
         print_json(report)
     else:

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Callable
-from pathlib import Path
 
 import numpy as np
 
@@ -21,7 +20,6 @@ from mrs_nav.maps.rasterize import DEFAULT_RESOLUTION, rasterize_world
 from mrs_nav.maps.world import load_world
 from mrs_nav.options import budget_option, count_option, number_option
 from mrs_nav.planning import PlanResult
-from mrs_nav.textfiles import check_writable
 from mrs_nav.trees.rrt import RRTConfig, grow_rrt
 from mrs_nav.trees.rrt_star import RRTStarConfig, grow_rrt_star
 from mrs_nav.trees.tree import Search
@@ -63,7 +61,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="R",
         help="reject tighter arcs (metres; default 0)",
     )
-    group.add_argument("--png", type=Path, default=None, metavar="FILE", help="draw the map, tree and path")
 
 
 def load_grid(args: argparse.Namespace) -> OccupancyGrid:
@@ -76,8 +73,6 @@ def load_grid(args: argparse.Namespace) -> OccupancyGrid:
 
 
 def _inflated(args: argparse.Namespace) -> tuple[OccupancyGrid, OccupancyGrid]:
-    if args.png is not None:
-        check_writable(args.png, "--png")
     grid = load_grid(args)
     return grid, grid.inflate(args.robot_radius)
 

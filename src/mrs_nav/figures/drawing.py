@@ -13,6 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.patches import Circle, Polygon
 
+from mrs_nav.atomic_write import atomic_path
 from mrs_nav.geometry import FloatArray
 from mrs_nav.maps.obstacles import Obstacles
 
@@ -62,7 +63,9 @@ def grid(limits: Limits, count: int = 25) -> FloatArray:
 
 def save(fig: Any, path: Path) -> Path:
     """Write ``fig`` as a PNG without the time-stamped metadata, so equal seeds give equal files."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, format="png", metadata={"Software": None})
-    plt.close(fig)
+    try:
+        with atomic_path(path, "figure") as temp:
+            fig.savefig(temp, format="png", metadata={"Software": None})
+    finally:
+        plt.close(fig)
     return path

@@ -146,3 +146,16 @@ def make_figures(out_dir: Path, seed: int) -> list[Path]:
     written += [_figure5(out_dir, scenario, rollout), _figure6(out_dir, scenario, rollout)]
     written.append(_figure7(out_dir, scenario, rollout))
     return written
+
+
+def draw_plan(
+    out: Path, obstacles: Obstacles, limits: Limits, *, start: FloatArray, goal: FloatArray, path: FloatArray
+) -> Path:
+    """A PNG of one potential-field plan (``mrs-nav plan --png``): obstacles, start, goal and path (metres)."""
+    fig, ax = new_axes("potential field", limits)
+    draw_obstacles(ax, obstacles)
+    ax.plot(path[:, 0], path[:, 1], color="tab:orange", linewidth=2, label=f"path {path_length(path):.2f} m", zorder=3)
+    ax.plot(start[0], start[1], "o", color="tab:green", label="start", zorder=4)
+    ax.plot(goal[0], goal[1], "*", color="tab:red", markersize=12, label="goal", zorder=4)
+    ax.legend(loc="lower right", fontsize=8)
+    return save(fig, out)

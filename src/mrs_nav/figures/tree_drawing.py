@@ -15,6 +15,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.collections import LineCollection
 
+from mrs_nav.atomic_write import atomic_path
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.trees import arcs
@@ -57,7 +58,9 @@ def draw_search(
     ax.set_ylabel("y [m]")
     ax.set_title(title, fontsize=10)
     ax.legend(loc="lower right", fontsize=8)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, bbox_inches="tight")
-    plt.close(fig)
+    try:
+        with atomic_path(out, "--png") as temp:
+            fig.savefig(temp, format="png", bbox_inches="tight")
+    finally:
+        plt.close(fig)
     return out

@@ -28,7 +28,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from mrs_nav.errors import InvalidInputError, MapFileError
+from mrs_nav.atomic_write import atomic_path
+from mrs_nav.errors import InvalidInputError, MapFileError, OutputFileError
 from mrs_nav.limits import (
     MAX_IMAGE_BYTES,
     MAX_MAP_ORIGIN_M,
@@ -227,18 +228,13 @@ def save_map(
         f"origin: [{', '.join(_yaml_float(v) for v in grid.origin)}]\n"
         "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\nmode: trinary\n"
     )
-    contents = ((image_path, header + pixels[::-1].tobytes()), (path, meta.encode()))
-    partials = [target.with_name(f".{target.name}.partial") for target, _ in contents]
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        for partial, (_, data) in zip(partials, contents, strict=True):
-            partial.write_bytes(data)
-        for partial, (target, _) in zip(partials, contents, strict=True):
-            partial.replace(target)
-    except OSError as err:
-        raise MapFileError(f"{path}: cannot write map: {err.strerror or err}") from err
-    finally:
-        for partial in partials:
-            with contextlib.suppress(OSError):  # renamed into place, never created, or its folder is not one
-                partial.unlink()
+        # The yaml is entered first so that it is renamed last: it never names an image not yet in place.
+        with contextlib.ExitStack() as stack:
+            yaml_temp = stack.enter_context(atomic_path(path, "map"))
+            image_temp = stack.enter_context(atomic_path(image_path, "map image"))
+            image_temp.write_bytes(header + pixels[::-1].tobytes())
+            yaml_temp.write_bytes(meta.encode())
+    except OutputFileError as err:
+        raise MapFileError(str(err)) from err
     return path

@@ -27,8 +27,14 @@ from typing import Any
 from mrs_nav.bag.salvage import readable_bag
 from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.replay.golden import load_golden, regressions
-from mrs_nav.replay.session_replay import PlanOptions, SessionReplay, replay_session, write_session_outputs
-from mrs_nav.replay.slam_replay import SlamReplay, truth_scans, write_outputs
+from mrs_nav.replay.session_replay import (
+    PlanOptions,
+    SessionReplay,
+    replay_session,
+    session_output_paths,
+    write_session_outputs,
+)
+from mrs_nav.replay.slam_replay import SlamReplay, output_paths, truth_scans, write_outputs
 from mrs_nav.slam.config import MAX_COORDINATE_M, SlamConfig
 from mrs_nav.slam.consistency import doubled_wall_fraction_at
 from mrs_nav.tables import markdown_table
@@ -82,6 +88,11 @@ class BagOutcome:
         if self.regressions:
             return "regressed"
         return "passed" if self.has_golden else "replayed"
+
+
+def job_outputs(out_dir: Path) -> list[Path]:
+    """Every file a replay may write into ``out_dir``."""
+    return [*output_paths(out_dir).values(), *session_output_paths(out_dir).values()]
 
 
 def golden_beside(bag: Path) -> Path | None:

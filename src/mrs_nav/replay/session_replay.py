@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from mrs_nav.atomic_write import write_text
 from mrs_nav.bag import topics
 from mrs_nav.bag.io import bag_topics
 from mrs_nav.errors import BagError
@@ -155,11 +156,17 @@ def plans_json(session: SessionReplay) -> dict[str, Any]:
     }
 
 
+def session_output_paths(out_dir: Path) -> dict[str, Path]:
+    """The files :func:`write_session_outputs` may write into ``out_dir``."""
+    return {"metrics": out_dir / "metrics.json", "plans": out_dir / "plans.json"}
+
+
 def write_session_outputs(session: SessionReplay, out_dir: Path) -> dict[str, Path]:
     """``metrics.json`` (and ``plans.json`` when planned) in ``out_dir``; byte-identical for the same replay."""
-    paths = {"metrics": out_dir / "metrics.json"}
-    paths["metrics"].write_text(dump_json(session.metrics), encoding="utf-8")
+    every = session_output_paths(out_dir)
+    paths = {"metrics": every["metrics"]}
+    write_text(paths["metrics"], dump_json(session.metrics), "metrics")
     if session.plans or session.plans_on_recorded_map:
-        paths["plans"] = out_dir / "plans.json"
-        paths["plans"].write_text(dump_json(plans_json(session)), encoding="utf-8")
+        paths["plans"] = every["plans"]
+        write_text(paths["plans"], dump_json(plans_json(session)), "plans")
     return paths

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from mrs_nav.atomic_write import atomic_path, write_text
 from mrs_nav.bag.io import read_messages
 from mrs_nav.bag.messages import pose_from_odometry, scan_from_message, stamp_of
 from mrs_nav.errors import BagError, InvalidInputError, MrsNavError
@@ -276,21 +277,32 @@ def _process(result: SlamReplay, stamp: float, msg: Any, odom: PoseTrack, truth:
     result.odometry.append(pose)
 
 
+def output_paths(out_dir: Path, name: str = "slam_map") -> dict[str, Path]:
+    """The files :func:`write_outputs` writes into ``out_dir`` (``map_image``: the .pgm beside the map)."""
+    return {
+        "map_yaml": out_dir / f"{name}.yaml",
+        "map_image": out_dir / f"{name}.pgm",
+        "trajectory": out_dir / "trajectory.csv",
+        "png": out_dir / f"{name}.png",
+    }
+
+
 def write_outputs(result: SlamReplay, out_dir: Path, name: str = "slam_map") -> dict[str, Path]:
     """Write the map (map_server format), the trajectory (CSV) and a PNG of both; return their paths."""
     grid = result.slam.grid
     # Trajectory poses are refreshed from the SLAM state, which loop closure may have corrected since.
     estimate = [p.pose for p in result.slam.processed]
     occupancy = OccupancyGrid(grid.to_occupancy(), grid.resolution, (grid.origin_x, grid.origin_y, 0.0))
-    yaml = save_map(occupancy, out_dir / f"{name}.yaml")
-    csv = out_dir / "trajectory.csv"
+    paths = output_paths(out_dir, name)
+    yaml = save_map(occupancy, paths["map_yaml"])
+    csv = paths["trajectory"]
     lines = ["stamp,x,y,yaw,odom_x,odom_y,odom_yaw,truth_x,truth_y,truth_yaw"]
     for i, (t, est, od) in enumerate(zip(result.stamps, estimate, result.odometry, strict=True)):
         gt = result.truth[i] if i < len(result.truth) else None
         gt_text = f"{gt.x:.4f},{gt.y:.4f},{gt.yaw:.5f}" if gt else ",,"
         lines.append(f"{t:.6f},{est.x:.4f},{est.y:.4f},{est.yaw:.5f},{od.x:.4f},{od.y:.4f},{od.yaw:.5f},{gt_text}")
-    csv.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    png = out_dir / f"{name}.png"
+    write_text(csv, "\n".join(lines) + "\n", "trajectory")
+    png = paths["png"]
     _plot(result, estimate, occupancy.values, png)
     return {"map_yaml": yaml, "trajectory": csv, "png": png}
 
@@ -333,7 +345,8 @@ def _plot(result: SlamReplay, estimate: list[Pose2D], occ: npt.NDArray[np.int8],
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_title(f"SLAM map and trajectories ({len(estimate)} scans)")
-    fig.savefig(png, dpi=100, bbox_inches="tight")
+    with atomic_path(png, "figure") as temp:
+        fig.savefig(temp, format="png", dpi=100, bbox_inches="tight")
 
 
 def _shades(occ: npt.NDArray[np.int8]) -> npt.NDArray[np.uint8]:

@@ -19,6 +19,8 @@ import rospy
 from nav_msgs.msg import OccupancyGrid, Odometry
 from sensor_msgs.msg import LaserScan
 
+from mrs_nav.atomic_write import write_text
+
 WARMUP = 1.0  # s published before measuring, so every connection is established
 
 
@@ -104,8 +106,7 @@ def main() -> None:
         t: {"first": first.get(t, 0), "sent": sent[t], "direct": {str(k): v for k, v in received[t].items()}}
         for t in messages
     }
-    with open(args.out, "w", encoding="utf-8") as f:
-        json.dump(out, f)
+    write_text(args.out, json.dumps(out), "bench peer results")
     rospy.signal_shutdown("done")
 
 

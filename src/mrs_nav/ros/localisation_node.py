@@ -208,7 +208,9 @@ class LocalisationNode:
         except MrsNavError as err:
             rospy.logwarn_throttle(5.0, f"localisation: skipping scan at {stamp.to_sec():.3f}: {err}")
             return
-        except (tf2_ros.LookupException, tf2_ros.ConnectivityException, tf2_ros.ExtrapolationException) as err:
+        except (
+            tf2_ros.TransformException
+        ) as err:  # also a frame tf cannot name ("", "/base_scan"), as in rrt_navigation
             rospy.logwarn_throttle(
                 5.0,
                 f"localisation: skipping scan at {stamp.to_sec():.3f}, no transform: {err} "

@@ -27,6 +27,8 @@ from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid, Odometry
 from std_msgs.msg import String, UInt32
 
+from mrs_nav.atomic_write import write_text
+
 
 def _wait(pred: Any, timeout: float, what: str) -> None:
     deadline = time.monotonic() + timeout
@@ -130,8 +132,7 @@ def main() -> None:
             "wall_s": max(r["wall_s"] for r in results.values()),
         }
     summary["wall_start"] = wall0  # time.monotonic() (system-wide) when the goals went out
-    with open(args.out, "w", encoding="utf-8") as out:
-        json.dump(summary, out)
+    write_text(args.out, json.dumps(summary), "bench peer results")
     for robot in robots.values():
         robot.close()
     rospy.signal_shutdown("done")

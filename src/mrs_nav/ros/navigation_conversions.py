@@ -46,9 +46,13 @@ def path_msg(path: FloatArray, stamp: rospy.Time, frame: str) -> Path:
 def pose_in_frame(buffer: tf2_ros.Buffer, msg: PoseStamped, frame: str) -> Pose2D:
     """The planar pose of ``msg`` expressed in ``frame`` (an empty header frame means ``frame``).
 
-    Raises InvalidInputError for a non-finite pose and ``tf2_ros.TransformException`` when tf cannot
+    An all-zero orientation is a pose without a heading (:func:`goal_heading`): its position is taken with no
+    rotation. Raises InvalidInputError for a non-finite pose and ``tf2_ros.TransformException`` when tf cannot
     transform it (waits up to 0.5 s for the transform)."""
-    pose = pose_from_msg(msg.pose)
+    if goal_heading(msg) is None:
+        pose = Pose2D(msg.pose.position.x, msg.pose.position.y, 0.0)
+    else:
+        pose = pose_from_msg(msg.pose)
     source = msg.header.frame_id.lstrip("/")
     if source in ("", frame):
         return pose

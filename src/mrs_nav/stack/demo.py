@@ -28,6 +28,7 @@ from typing import Protocol
 import matplotlib
 import numpy as np
 
+from mrs_nav.atomic_write import atomic_path
 from mrs_nav.config_files import node_default
 from mrs_nav.control.path_following import cross_track_distance
 from mrs_nav.errors import InvalidInputError
@@ -340,7 +341,9 @@ def save_figure(result: DemoResult, path: Path, title: str = "") -> Path:
     ax.set_title(title or f"{result.goals_reached}/{len(result.outcomes)} goals, {result.collisions} contacts")
     ax.legend(loc="upper right", fontsize=8)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    try:
+        with atomic_path(path, "figure") as temp:
+            fig.savefig(temp, format="png", dpi=110)
+    finally:
+        plt.close(fig)
     return path
