@@ -47,7 +47,9 @@ class BagWriter:
 
     def __enter__(self) -> BagWriter:
         """Open a temporary bag beside :attr:`path`; it replaces :attr:`path` only when the block succeeds
-        (:func:`mrs_nav.atomic_write.atomic_path`), so an existing bag is replaced only by a whole new one."""
+        (:func:`mrs_nav.atomic_write.atomic_path`), so an existing bag is replaced only by a whole new one.
+        A recording stopped by Ctrl-C is the exception: what was recorded is closed into a whole bag and kept,
+        as ``rosbag record`` keeps it, before the interrupt goes on."""
         with contextlib.ExitStack() as stack:
             temp = stack.enter_context(atomic_path(self.path, "bag"))
             writer = Writer(temp)
@@ -67,6 +69,9 @@ class BagWriter:
     def __exit__(
         self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
     ) -> None:
+        if exc_type is not None and issubclass(exc_type, KeyboardInterrupt):
+            self._open.__exit__(None, None, None)  # close and rename: the messages so far are a valid bag
+            return
         self._open.__exit__(exc_type, exc, tb)
 
     def write(self, topic: str, msgtype: str, stamp_ns: int, message: Any, *, latching: bool = False) -> None:
