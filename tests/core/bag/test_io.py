@@ -73,10 +73,15 @@ def test_scan_with_inconsistent_length_is_rejected():
 
 def test_an_interrupted_recording_keeps_what_it_wrote_and_a_failed_one_leaves_nothing(tmp_path):
     kept, failed = tmp_path / "kept.bag", tmp_path / "failed.bag"
-    for bag, error in ((kept, KeyboardInterrupt), (failed, RuntimeError)):
-        with pytest.raises(error), BagWriter(bag) as writer:
+
+    def record_then(bag, error):
+        with BagWriter(bag) as writer:
             writer.write("/odom", ODOMETRY, 1_000_000_000, odometry_message(Pose2D(1, 2, 3), 1.0, "odom", "base"))
             raise error
+
+    for bag, error in ((kept, KeyboardInterrupt), (failed, RuntimeError)):
+        with pytest.raises(error):
+            record_then(bag, error)
     assert [stamp_of(message) for _, _, message in read_messages(kept, ["/odom"])] == [pytest.approx(1.0)]
     assert not failed.exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.bag"]  # no temporary file left either
