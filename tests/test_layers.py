@@ -21,6 +21,7 @@ RANKS: dict[str, int] = {
     "limits": 1,
     "textfiles": 1,
     "jit": 1,
+    "clock_jump": 1,
     "planning": 2,
     "motion_model": 2,
     "options": 2,
