@@ -19,6 +19,7 @@ import time
 import xmlrpc.client
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -113,12 +114,30 @@ class ClockJumper:
         self.pub.unregister()
 
 
+@dataclass(frozen=True)
+class Stack:
+    """A launch to drive under: its arguments, the navigation node (whose ``~status`` is read), the frame of its
+    goals, and what it publishes that must go on after a jump besides a moving ``/cmd_vel``."""
+
+    launch: tuple[str, ...]
+    node: str
+    frame: str
+    published: tuple[str, ...]
+
+
+SLAM = Stack(("rrt_navigation.launch", "rviz:=false"), "rrt_navigation", "map", ("map->odom", "/map"))
+AMCL = Stack(("navigation.launch", "rviz:=false"), "rrt_navigation", "map", ("map->odom", "/amcl_pose"))
+FIELD = Stack(("potential_field_navigation.launch", "trajectory_file:=none"), "potential_field_navigation", "odom", ())
+
+
 @contextmanager
-def _subscribers(rospy: Any, master: RosMaster) -> Iterator[tuple[Activity, StatusLog, TruthTrack, ClockJumper, Any]]:
+def _subscribers(
+    rospy: Any, master: RosMaster, stack: Stack
+) -> Iterator[tuple[Activity, StatusLog, TruthTrack, ClockJumper, Any]]:
     from geometry_msgs.msg import PoseStamped
 
     activity = Activity(rospy)
-    status = StatusLog(rospy, "/rrt_navigation/status")
+    status = StatusLog(rospy, f"/{stack.node}/status")
     truth = TruthTrack(rospy, "simple.world")
     jumper = ClockJumper(rospy, master)
     goal_pub = rospy.Publisher("/move_base_simple/goal", PoseStamped, queue_size=1, latch=True)
@@ -130,11 +149,11 @@ def _subscribers(rospy: Any, master: RosMaster) -> Iterator[tuple[Activity, Stat
             closing.close()
 
 
-def _send_goal(rospy: Any, pub: Any, x: float, y: float) -> None:
+def _send_goal(pub: Any, frame: str, x: float, y: float) -> None:
     from geometry_msgs.msg import PoseStamped
 
     goal = PoseStamped()
-    goal.header.frame_id = "map"
+    goal.header.frame_id = frame
     goal.pose.position.x, goal.pose.position.y = x, y
     goal.pose.orientation.w = 1.0
     pub.publish(goal)
@@ -146,30 +165,34 @@ def _moved_from(truth: TruthTrack, x: float, y: float) -> float:
 
 
 @pytest.mark.parametrize(
-    ("launch", "offset_s", "published"),
+    ("stack", "offset_s"),
     [
-        pytest.param(("rrt_navigation.launch",), -1.0, ("map->odom", "/map", "/cmd_vel"), id="slam-back-1s"),
-        pytest.param(("rrt_navigation.launch",), 185.0, ("map->odom", "/map", "/cmd_vel"), id="slam-back-185s"),
-        pytest.param(
-            ("navigation.launch", "rviz:=false"), 185.0, ("map->odom", "/amcl_pose", "/cmd_vel"), id="amcl-back-185s"
-        ),
+        pytest.param(SLAM, -1.0, id="slam-back-1s"),
+        pytest.param(SLAM, 185.0, id="slam-back-185s"),
+        pytest.param(AMCL, 185.0, id="amcl-back-185s"),
+        pytest.param(FIELD, 185.0, id="field-back-185s"),
     ],
 )
 def test_a_clock_jump_during_a_drive_stops_no_node_and_the_next_goal_is_reached(
-    ros_master: RosMaster, rospy_node: Any, launch: tuple[str, ...], offset_s: float, published: tuple[str, ...]
+    ros_master: RosMaster, rospy_node: Any, stack: Stack, offset_s: float
 ) -> None:
     rospy = rospy_node
     with (
-        _subscribers(rospy, ros_master) as (activity, status, truth, jumper, goal_pub),
-        ros_master.launch(*launch, *MAX_RATE, "rviz:=false", "seed:=5", "x:=-1.5", "y:=-1.5") as proc,
+        _subscribers(rospy, ros_master, stack) as (activity, status, truth, jumper, goal_pub),
+        ros_master.launch(*stack.launch, *MAX_RATE, "seed:=5", "x:=-1.5", "y:=-1.5") as proc,
     ):
-        wait_for(lambda: proc.poll() is not None or goal_pub.get_num_connections() > 0, 60.0, "the navigation node")
-        ready = ("map->odom", "/map")
-        wait_for(lambda: proc.poll() is not None or all(activity.since(0.0)[w] for w in ready), 60.0, "a map")
+        wait_for(
+            lambda: (
+                proc.poll() is not None
+                or (goal_pub.get_num_connections() > 0 and all(activity.since(0.0)[w] for w in stack.published))
+            ),
+            60.0,
+            f"the navigation node and {stack.published}",
+        )
         assert proc.poll() is None, "roslaunch exited"
-        mapped = rospy.get_time()
-        wait_for(lambda: rospy.get_time() > mapped + 2.0, 30.0, "the navigation node to have the map too")
-        _send_goal(rospy, goal_pub, *GOAL)
+        ready = rospy.get_time()
+        wait_for(lambda: rospy.get_time() > ready + 2.0, 30.0, "the navigation node to have the map too")
+        _send_goal(goal_pub, stack.frame, *GOAL)
         wait_for(lambda: _moved_from(truth, -1.5, -1.5) > 0.3, 60.0, "the robot to set off")
         before = len(status.messages)
         resumed = jumper.jump(offset_s)
@@ -178,7 +201,7 @@ def test_a_clock_jump_during_a_drive_stops_no_node_and_the_next_goal_is_reached(
         if offset_s < 0.0:
             assert any("sim time went back" in m for m in status.messages[before:]), status.messages
         heard = len(status.messages)
-        _send_goal(rospy, goal_pub, *GOAL)
+        _send_goal(goal_pub, stack.frame, *GOAL)
         wait_for(
             lambda: any(m.startswith(("reached:", "failed:")) for m in status.messages[heard:]),
             120.0,
@@ -188,7 +211,7 @@ def test_a_clock_jump_during_a_drive_stops_no_node_and_the_next_goal_is_reached(
         _, x, y = truth.last()
         assert math.hypot(x - GOAL[0], y - GOAL[1]) <= 0.2
         after = activity.since(resumed)
-        assert all(after[what] > 0 for what in published), after
+        assert all(after[what] > 0 for what in (*stack.published, "/cmd_vel")), after
 
 
 def test_a_bag_played_twice_into_slam_gets_map_to_odom_both_times(
