@@ -49,7 +49,7 @@ from mrs_nav.ros.params import private_param
 
 # Each filter parameter with its default, so that it is read as the default's type: rosparam hands 1e-3 (an
 # exponent without a dot) over as text.
-_FILTER_PARAMS = {f.name: f.default for f in dataclasses.fields(LocalisationConfig)}
+_FILTER_PARAMS: dict[str, Any] = {f.name: f.default for f in dataclasses.fields(LocalisationConfig)}
 _COV_INDEX = (0, 1, 5)  # x, y, yaw rows/columns of a 6x6 pose covariance
 
 
