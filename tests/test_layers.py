@@ -22,6 +22,7 @@ RANKS: dict[str, int] = {
     "textfiles": 1,
     "atomic_write": 1,
     "jit": 1,
+    "clock_jump": 1,
     "planning": 2,
     "motion_model": 2,
     "options": 2,

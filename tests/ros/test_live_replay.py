@@ -6,6 +6,8 @@ from __future__ import annotations
 import json
 import subprocess
 import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -74,25 +76,9 @@ def test_rosbag_play_into_the_slam_node_agrees_with_offline_replay(
 
     sub = rospy.Subscriber("/map", GridMsg, on_map, queue_size=5)
     try:
-        with ros_master.launch("slam.launch", "sim:=false", "rviz:=false") as launch:
-            wait_for(
-                lambda: launch.poll() is not None or _subscribed(ros_master, "/scan", "/slam"),
-                60.0,
-                "the slam node subscribing /scan",
-            )
-            assert launch.poll() is None, "roslaunch exited"
+        with live_slam(ros_master):
             # Twice real time only: the node drops scans it cannot keep up with, and the machine is shared.
-            play = subprocess.Popen(
-                ["rosbag", "play", "--clock", "-r", "2", "-q", str(bag)],
-                env=ros_master.env,
-                start_new_session=True,
-                stdout=subprocess.DEVNULL,
-                stderr=subprocess.STDOUT,
-            )
-            try:
-                assert play.wait(timeout=180) == 0
-            finally:
-                stop(play)
+            play_bag(ros_master, bag, "-r", "2")
             end = _last_stamp(bag)
             # The node publishes /map every map_update_interval of sim time; the last one covers the drive's end.
             wait_for(lambda: _latest_stamp(maps, lock) >= end - config.map_update_interval - 0.5, 30.0, "the last /map")
@@ -103,6 +89,34 @@ def test_rosbag_play_into_the_slam_node_agrees_with_offline_replay(
     agreement = compare_maps(live, offline)
     assert agreement.iou >= 0.95, agreement
     assert agreement.common_known_cells > 1000
+
+
+@contextmanager
+def live_slam(master: RosMaster) -> Iterator[None]:
+    """``slam.launch sim:=false`` (no simulator, no rviz) for the ``with`` block, once its SLAM node takes scans."""
+    with master.launch("slam.launch", "sim:=false", "rviz:=false") as launch:
+        wait_for(
+            lambda: launch.poll() is not None or _subscribed(master, "/scan", "/slam"),
+            60.0,
+            "the slam node subscribing /scan",
+        )
+        assert launch.poll() is None, "roslaunch exited"
+        yield
+
+
+def play_bag(master: RosMaster, bag: Path, *options: str) -> None:
+    """``rosbag play --clock OPTIONS BAG`` to its end (at most 180 s)."""
+    play = subprocess.Popen(
+        ["rosbag", "play", "--clock", *options, "-q", str(bag)],
+        env=master.env,
+        start_new_session=True,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.STDOUT,
+    )
+    try:
+        assert play.wait(timeout=180) == 0
+    finally:
+        stop(play)
 
 
 def _subscribed(master: RosMaster, topic: str, node: str) -> bool:

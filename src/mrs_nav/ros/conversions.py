@@ -12,6 +12,7 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
+import numpy.typing as npt
 import rospy
 from geometry_msgs.msg import Pose, Quaternion, Transform, TransformStamped, Twist
 from nav_msgs.msg import Odometry as OdometryMsg
@@ -200,6 +201,6 @@ def any_reading(ranges: FloatArray) -> bool:
     return bool(np.any((ranges >= 0.0) & ~np.isnan(ranges)))
 
 
-def valid_ranges(msg: LaserScan, ranges: FloatArray) -> np.ndarray:
+def valid_ranges(msg: LaserScan, ranges: FloatArray) -> npt.NDArray[np.bool_]:
     """Boolean mask of the beams with a finite reading within [range_min, range_max]."""
-    return np.isfinite(ranges) & (ranges >= msg.range_min) & (ranges <= msg.range_max)
+    return np.isfinite(ranges) & (ranges >= float(msg.range_min)) & (ranges <= float(msg.range_max))

@@ -15,6 +15,9 @@ describes the robot as it is then, and a node behind on its scans (10 000 partic
 otherwise weigh it against scans of where the robot was before (a kidnapped or teleported robot), which puts the
 particles on the wrong place before the first true scan arrives.
 
+When sim time jumps backwards (a bag played again, the simulator restarted) the particles are kept, the tf
+buffer is cleared and map -> odom goes on from the new time (:mod:`mrs_nav.ros.clock_jump`).
+
 A scan or pose that cannot be used is logged (throttled) and skipped; the node never dies of one.
 """
 
@@ -41,6 +44,7 @@ from mrs_nav.config_files import node_default
 from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.geometry import FloatArray, Pose2D, format_point
 from mrs_nav.localisation import BeamScan, LocalisationConfig, ParticleFilter, PoseEstimate
+from mrs_nav.ros.clock_jump import TimeJumpGuard
 from mrs_nav.ros.conversions import pose_from_msg, pose_msg
 from mrs_nav.ros.map_odom import MapOdomBroadcaster, check_timing, lookup_pose, tf_state
 from mrs_nav.ros.navigation_conversions import grid_from_msg
@@ -49,7 +53,6 @@ from mrs_nav.ros.params import private_params
 NODE = "localisation"
 _default = functools.partial(node_default, NODE)
 _COV_INDEX = (0, 1, 5)  # x, y, yaw rows/columns of a 6x6 pose covariance
-_TIME_JUMP = 1.0  # s: the clock this much behind its last reading means sim time went back (a bag restarted)
 
 
 @dataclass(frozen=True)
@@ -109,7 +112,6 @@ class LocalisationNode:
         self._pending_pose: tuple[Pose2D, FloatArray] | None = None
         self._mount: tuple[str, Pose2D] | None = None
         self._map_to_odom: Pose2D | None = None
-        self._last_clock = -math.inf
         self._reset_stamp = rospy.Time(0)  # scans stamped before the last reset of the belief are not used
         self._buffer = tf2_ros.Buffer(cache_time=rospy.Duration(30.0))
         self._listener = tf2_ros.TransformListener(self._buffer)
@@ -123,7 +125,8 @@ class LocalisationNode:
         else:
             threading.Thread(target=self._request_map, name="static_map", daemon=True).start()
         self._scan_sub = rospy.Subscriber("scan", LaserScan, self._on_scan, queue_size=2)
-        self._timer = rospy.Timer(rospy.Duration(config.transform_publish_period), self._publish_transform)
+        self._time_jump = TimeJumpGuard("localisation", self._on_time_jump, self._buffer)
+        self._timer = self._time_jump.timer(config.transform_publish_period, self._publish_transform)
 
     # -- inputs ---------------------------------------------------------------------------------------------------
 
@@ -183,14 +186,7 @@ class LocalisationNode:
         return EmptyResponse()
 
     def _on_scan(self, msg: LaserScan) -> None:
-        now = rospy.get_time()
-        if now < self._last_clock - _TIME_JUMP:
-            rospy.logwarn("localisation: time went back; clearing the tf buffer")
-            self._buffer.clear()
-            self._map_odom.reset()
-            with self._lock:
-                self._reset_stamp = rospy.Time(0)
-        self._last_clock = now
+        self._time_jump.check()
         stamp = msg.header.stamp
         c = self.config
         try:
@@ -218,6 +214,14 @@ class LocalisationNode:
             )
             return
         self._publish_estimate(estimate, particles, stamp)
+
+    def _on_time_jump(self, _seconds: float) -> str:
+        """Sim time went back: broadcast from the new time on, and take scans whatever the date of the last
+        pose given (it lies ahead of the new time)."""
+        self._map_odom.reset()
+        with self._lock:
+            self._reset_stamp = rospy.Time(0)
+        return "particles kept"
 
     def _lookup(self, parent: str, child: str, stamp: rospy.Time) -> Pose2D:
         return lookup_pose(self._buffer, parent, child, stamp, self.config.tf_wait)

@@ -23,14 +23,14 @@ T = TypeVar("T", bool, int, float, str)
 
 
 def _convert(name: str, value: Any, default: T) -> T:
-    kind = type(default)
-    if kind is bool:
+    # isinstance on the default (bool first: a bool is an int) lets mypy check each branch for its type
+    if isinstance(default, bool):
         if isinstance(value, bool):
             return value
-    elif kind is int:
+    elif isinstance(default, int):
         if isinstance(value, int) and not isinstance(value, bool):
             return value
-    elif kind is float:
+    elif isinstance(default, float):
         # roslaunch hands ``value="nan"`` over as a string; any text Python reads as a number is one.
         if isinstance(value, (int, float, str)) and not isinstance(value, bool):
             try:
@@ -42,7 +42,7 @@ def _convert(name: str, value: Any, default: T) -> T:
             return result
     elif isinstance(value, str):
         return value
-    raise InvalidInputError(f"~{name}: expected {kind.__name__}, got {value!r}")
+    raise InvalidInputError(f"~{name}: expected {type(default).__name__}, got {value!r}")
 
 
 def private_param(name: str, default: T) -> T:
@@ -57,7 +57,14 @@ def private_params(node: str) -> dict[str, Any]:
     and mappings as given), the default where unset."""
     values: dict[str, Any] = {}
     for name, default in node_defaults(node).items():
-        if isinstance(default, bool | int | float | str):
+        # one branch per type, so that each call's type variable is one type (mypy strict)
+        if isinstance(default, bool):
+            values[name] = private_param(name, default)
+        elif isinstance(default, int):
+            values[name] = private_param(name, default)
+        elif isinstance(default, float):
+            values[name] = private_param(name, default)
+        elif isinstance(default, str):
             values[name] = private_param(name, default)
         else:
             values[name] = rospy.get_param(f"~{name}", default)

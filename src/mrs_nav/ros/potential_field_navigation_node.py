@@ -10,7 +10,9 @@ as CSV with the header ``t,x,y,yaw`` (sim seconds, metres, radians), which the c
 ``np.genfromtxt(path, delimiter=",", names=True)``. With ``~heartbeat`` (default false; the launch file sets it
 with ``lockstep:=true``) ``cmd_vel`` goes out every control period even while idle (a zero Twist), which is
 what paces a simulator in lockstep. A scan whose angles or range limits are not finite numbers is dropped with
-a throttled warning.
+a throttled warning. When sim time jumps backwards (the simulator restarted, a bag played again) the active goal
+is dropped (``~status`` ``failed: sim time went back ...``), the robot stopped, and the tf buffer and the last
+ground-truth pose are cleared (:mod:`mrs_nav.ros.clock_jump`); the trajectory file goes on with the new times.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ from mrs_nav.fields.follower import FieldFollower, FieldFollowerConfig, scan_obs
 from mrs_nav.geometry import Pose2D, format_point
 from mrs_nav.maps.obstacles import Obstacles
 from mrs_nav.maps.world import load_world
+from mrs_nav.ros.clock_jump import TimeJumpGuard
 from mrs_nav.ros.conversions import (
     any_reading,
     pose_from_odometry,
@@ -150,6 +153,7 @@ class PotentialFieldNavigationNode:
             rospy.Subscriber("scan", LaserScan, self._on_scan, queue_size=1) if config.obstacles == "scan" else None
         )
         self._timer: rospy.Timer | None = None
+        self._time_jump = TimeJumpGuard("potential_field_navigation", self._on_time_jump, self._tf_buffer)
 
     def start(self) -> None:
         """Open the trajectory file, take the goal parameter if set, and start the control loop."""
@@ -167,7 +171,7 @@ class PotentialFieldNavigationNode:
         self._status("idle", "waiting for a goal")
         if self.config.goal is not None:
             self._set_goal(*self.config.goal)
-        self._timer = rospy.Timer(rospy.Duration(1.0 / self.config.rate_hz), self._on_timer)
+        self._timer = self._time_jump.timer(1.0 / self.config.rate_hz, self._on_timer)
 
     # -- inputs -------------------------------------------------------------------------------------------------
 
@@ -202,6 +206,7 @@ class PotentialFieldNavigationNode:
         self._status("active", f"goal {format_point(x, y)} accepted")
 
     def _on_scan(self, msg: LaserScan) -> None:
+        self._time_jump.check()
         pose = self._pose()
         if pose is None:
             return
@@ -276,6 +281,18 @@ class PotentialFieldNavigationNode:
             with self._lock:
                 if self._trajectory is not None:
                     self._trajectory.flush()
+
+    def _on_time_jump(self, seconds: float) -> str:
+        """Sim time went back: drop the goal (the follower's stall and escape timers are of the old time line) and
+        the ground-truth pose, whose stamp lies ahead of the new time."""
+        with self._lock:
+            follower, self._follower = self._follower, None
+            self._truth = None
+        if follower is None:
+            return "no goal was active"
+        publish_unless_shutdown(self._cmd_pub, Twist(), "potential_field_navigation")
+        self._status("failed", f"sim time went back {seconds:.1f} s (the simulator restarted?); goal dropped")
+        return "goal dropped, robot stopped"
 
     def _status(self, state: str, message: str) -> None:
         publish_unless_shutdown(self._status_pub, String(data=f"{state}: {message}"), "potential_field_navigation")

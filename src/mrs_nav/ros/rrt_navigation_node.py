@@ -20,6 +20,10 @@ latched, at most once a second while subscribed: the map as planned on, obstacle
 The robot stops (the goal kept) when the ``map -> odom`` correction is older than ``~correction_freshness`` or
 the last scan older than ``~scan_timeout`` (sim time): a localisation source or laser that died.
 
+When sim time jumps backwards (a bag played again, the simulator restarted) the active goal is aborted with the
+reason (``~status`` ``failed: sim time went back ...``) and the robot stopped; the tf buffer and the stamped
+inputs are cleared, and the next goal is driven as usual (:mod:`mrs_nav.ros.clock_jump`).
+
 Planning runs in one worker thread, off the control timer: the timer keeps publishing ``cmd_vel`` every period
 (following the current path, short of any new obstacle on it, during a periodic replan or one for a path blocked
 further on; a zero Twist while there is no usable path), so a lockstep simulator is never held still by a plan,
@@ -70,6 +74,7 @@ from mrs_nav.navigation.navigator import (
     rrt_planner,
 )
 from mrs_nav.navigation.plan_worker import run_plan
+from mrs_nav.ros.clock_jump import TimeJumpGuard, keep_status_timer
 from mrs_nav.ros.conversions import pose_msg
 from mrs_nav.ros.navigation_conversions import (
     goal_heading,
@@ -228,7 +233,7 @@ class RrtNavigationNode:
         self._last_scan = -math.inf  # sim time the last usable scan arrived
         self._costmap: tuple[OccupancyGrid | None, float] = (None, -math.inf)  # last published, when
         self._timer: rospy.Timer | None = None
-        self._last_time = rospy.Time(0)
+        self._time_jump = TimeJumpGuard("rrt_navigation", self._on_time_jump, self._tf_buffer)
         # one worker: at most one plan runs at a time (the navigator asks for no other while one is in flight)
         self._planner_pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="rrt_navigation_plan")
         self._plan: tuple[PlanRequest, Future[PlanOutcome]] | None = None
@@ -238,6 +243,7 @@ class RrtNavigationNode:
         self._status_pub.publish(String(data="idle: waiting for a goal"))
         rospy.on_shutdown(self._stop)
         self._server.start()
+        keep_status_timer(self._server)
         self._subs = [
             # numpy_msg: the cells arrive as one int8 array (plain genpy unpacks a tuple of ints, then numpy
             # copies it: most of what a SLAM map update cost this node)
@@ -249,7 +255,7 @@ class RrtNavigationNode:
         # The planner thread holds the GIL for long stretches; the default 5 ms switch interval would delay each
         # /clock, /tf and timer hand-off of the control loop by up to that, which is what paces a lockstep sim.
         sys.setswitchinterval(0.0005)
-        self._timer = rospy.Timer(rospy.Duration(1.0 / self.config.controller_frequency), self._on_timer)
+        self._timer = self._time_jump.timer(1.0 / self.config.controller_frequency, self._on_timer)
 
     # -- inputs ---------------------------------------------------------------------------------------------
 
@@ -269,6 +275,7 @@ class RrtNavigationNode:
             self.navigator.set_map(grid, rospy.get_time())
 
     def _on_scan(self, msg: LaserScan) -> None:
+        self._time_jump.check()
         try:
             origin, ends, hit = scan_in_frame(
                 self._tf_buffer, msg, self.config.map_frame, self.config.transform_tolerance_s
@@ -391,13 +398,6 @@ class RrtNavigationNode:
 
     def _on_timer(self, event: rospy.timer.TimerEvent) -> None:
         now = rospy.Time.now()
-        if now < self._last_time:  # sim time jumped back (a bag restarted): forget the goal
-            rospy.logwarn("rrt_navigation: time jumped backwards; dropping the goal")
-            with self._lock:
-                self._report(self.navigator.cancel())
-                self._last_scan = -math.inf
-            self._tf_buffer.clear()
-        self._last_time = now
         pose = self._pose()
         blind = self._blind(now.to_sec())
         with self._lock:
@@ -424,6 +424,23 @@ class RrtNavigationNode:
         self._report(events)
         if handle is not None:
             self._action_step(handle, state, pose, now, events)
+
+    def _on_time_jump(self, seconds: float) -> str:
+        """Sim time went back: abort the active goal (its deadlines and progress are of the old time line) and
+        forget the stamped inputs."""
+        with self._lock:
+            dropped = self.navigator.cancel()  # its "goal cancelled" is reported as the failure below
+            handle, self._active = self._active, None
+            self._last_scan = -math.inf
+            self._costmap = (None, -math.inf)
+        if not dropped:
+            return "no goal was active"
+        text = f"sim time went back {seconds:.1f} s (a bag played again or the simulator restarted?); goal dropped"
+        publish_unless_shutdown(self._cmd_pub, Twist(), "rrt_navigation")
+        self._report([NavEvent(EventKind.FAILED, text)])
+        if handle is not None:
+            handle.set_aborted(MoveBaseResult(), text)
+        return "active goal aborted, robot stopped"
 
     def _action_step(
         self,

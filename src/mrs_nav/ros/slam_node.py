@@ -11,7 +11,9 @@ A scan that cannot be used (wrong length, NaN angles, bad geometry, no transform
 building) is logged (throttled) and skipped; the node never dies of one and no message changes the map but by
 being mapped. A scan in another frame than the laser's (e.g. ``base_link``) is used with that frame's mounting
 when tf knows it, else dropped with a throttled warning. The map is reset only by the ``~reset`` service
-(std_srvs/Empty) or when sim time jumps backwards (a bag restarted); each reset is logged.
+(std_srvs/Empty), or when sim time jumps backwards (a bag played again, the simulator restarted) and
+``~reset_map_on_time_jump`` is true; each reset is logged. On a jump back the map and the correction are kept by
+default: the tf buffer is cleared and map -> odom and /map go on from the new time (:mod:`mrs_nav.ros.clock_jump`).
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ from std_srvs.srv import Empty, EmptyRequest, EmptyResponse
 from mrs_nav.config_files import node_default
 from mrs_nav.errors import MrsNavError
 from mrs_nav.geometry import Pose2D
+from mrs_nav.ros.clock_jump import TimeJumpGuard
 from mrs_nav.ros.conversions import any_reading, pose_msg, scan_data
 from mrs_nav.ros.map_odom import MapOdomBroadcaster, check_timing, lookup_pose, tf_state
 from mrs_nav.ros.navigation_conversions import publish_unless_shutdown
@@ -42,7 +45,6 @@ from mrs_nav.slam import Slam, SlamConfig
 NODE = "slam"
 _default = functools.partial(node_default, NODE)
 _TF_ERRORS = (tf2_ros.LookupException, tf2_ros.ConnectivityException, tf2_ros.ExtrapolationException)
-_TIME_JUMP = 1.0  # s: the clock this much behind its last reading means sim time went back (a bag restarted)
 
 
 @dataclass(frozen=True)
@@ -55,6 +57,7 @@ class SlamNodeConfig:
     map_frame: str = _default("map_frame")
     transform_publish_period: float = _default("transform_publish_period")
     tf_wait: float = _default("tf_wait")
+    reset_map_on_time_jump: bool = _default("reset_map_on_time_jump")
 
     def __post_init__(self) -> None:
         check_timing(self.transform_publish_period, tf_wait=self.tf_wait)
@@ -86,7 +89,6 @@ class SlamNode:
         # navigators' correction_freshness (0.15 s), or they stop the robot while SLAM is merely busy.
         self._correction: Pose2D | None = None
         self._mountings: dict[str, Pose2D] = {}  # base -> scan frame, per frame seen (static mountings)
-        self._last_clock = -math.inf
         self._last_map_time = -math.inf
         self._buffer = tf2_ros.Buffer(cache_time=rospy.Duration(30.0))
         self._listener = tf2_ros.TransformListener(self._buffer)
@@ -95,7 +97,8 @@ class SlamNode:
         self._map_pub = rospy.Publisher("map", OccupancyGrid, queue_size=1, latch=True)
         self._meta_pub = rospy.Publisher("map_metadata", MapMetaData, queue_size=1, latch=True)
         self._scan_sub = rospy.Subscriber("scan", LaserScan, self._on_scan, queue_size=5)
-        self._timer = rospy.Timer(rospy.Duration(config.transform_publish_period), self._publish_transform)
+        self._time_jump = TimeJumpGuard("slam", self._on_time_jump, self._buffer)
+        self._timer = self._time_jump.timer(config.transform_publish_period, self._publish_transform)
         self._reset_srv = rospy.Service("~reset", Empty, self._on_reset)
 
     # -- scans ----------------------------------------------------------------------------------------------------
@@ -103,11 +106,7 @@ class SlamNode:
     def _on_scan(self, msg: LaserScan) -> None:
         stamp = msg.header.stamp.to_sec()
         # The clock, not the scans' stamps, decides whether time went back: one bogus stamp must not reset.
-        now = rospy.get_time()
-        if now < self._last_clock - _TIME_JUMP:
-            self._reset(f"time went back {self._last_clock - now:.1f} s")
-            self._buffer.clear()
-        self._last_clock = now
+        self._time_jump.check()
         try:
             scan = scan_data(msg)
             if not any_reading(scan.ranges):
@@ -152,8 +151,7 @@ class SlamNode:
             self._mountings[frame] = self._lookup(self.config.base_frame, frame, stamp)
         return self._mountings[frame]
 
-    def _reset(self, reason: str) -> None:
-        rospy.logwarn(f"slam: {reason}; starting a new map")
+    def _new_map(self) -> None:
         with self._lock:
             self._slam = None
             self._correction = None
@@ -161,8 +159,18 @@ class SlamNode:
         self._map_odom.reset()
 
     def _on_reset(self, _request: EmptyRequest) -> EmptyResponse:
-        self._reset("reset requested on ~reset")
+        rospy.logwarn("slam: reset requested on ~reset; starting a new map")
+        self._new_map()
         return EmptyResponse()
+
+    def _on_time_jump(self, _seconds: float) -> str:
+        """Sim time went back: broadcast and publish from the new time on; a new map only if asked."""
+        self._map_odom.reset()
+        self._last_map_time = -math.inf  # the next processed scan publishes /map, not one map_update_interval later
+        if self.config.reset_map_on_time_jump:
+            self._new_map()
+            return "starting a new map (~reset_map_on_time_jump)"
+        return "map and correction kept (~reset_map_on_time_jump false)"
 
     # -- outputs --------------------------------------------------------------------------------------------------
 

@@ -21,6 +21,7 @@ Zenoh file) stops the node at start with one line instead.
 
 from __future__ import annotations
 
+import functools
 import threading
 import time
 from collections.abc import Mapping
@@ -196,7 +197,7 @@ class ZenohBridgeNode:
             if self._session_errors.allow(time.monotonic()):
                 rospy.logerr("zenoh bridge: %s; ROS side unaffected, retrying", err)
             return
-        entities = [
+        entities: list[Any] = [  # queryables and subscribers: each is undeclared on close
             session.declare_queryable(f"{self.services}/@types/**", self._answer_types),
             session.declare_queryable(f"{self.services}/@bridge/publish/**", self._answer_publish),
             session.declare_queryable(status_key(self.prefix), self._answer_status),
@@ -205,7 +206,7 @@ class ZenohBridgeNode:
             key = topic_key(self.prefix, topic, self.config.layout, inbound.rule.type, self.validator.md5(topic))
             entities.append(
                 session.declare_subscriber(
-                    key, lambda s, t=topic: self._on_remote_sample(t, s), allowed_origin=zenoh.Locality.REMOTE
+                    key, functools.partial(self._on_remote_sample, topic), allowed_origin=zenoh.Locality.REMOTE
                 )
             )
         with self._lock:

@@ -263,7 +263,8 @@ class Slam:
         moved = odom.relative_to(last.odom)
         if math.hypot(moved.x, moved.y) >= c.linearUpdate or abs(moved.yaw) >= c.angularUpdate:
             return True
-        return c.temporalUpdate > 0.0 and stamp - last.stamp >= c.temporalUpdate
+        # either way in time: after sim time went back (a bag played again) the last stamp lies ahead of the clock
+        return c.temporalUpdate > 0.0 and abs(stamp - last.stamp) >= c.temporalUpdate
 
     def add_scan(
         self, odom: Pose2D, scan: LaserScanData, stamp: float, laser_pose: Pose2D | None = None

@@ -78,6 +78,9 @@ def test_update_gates():
     assert slam.add_scan(Pose2D(0.0, 0.0, 0.0), scan, 3.5) is not None  # temporalUpdate
     assert slam.add_scan(Pose2D(0.51, 0.0, 0.0), scan, 3.6) is not None  # linearUpdate
     assert slam.add_scan(Pose2D(0.51, 0.0, 0.41), scan, 3.7) is not None  # angularUpdate
+    # sim time went back (a bag played again): the robot standing still, the temporal gate still opens
+    assert slam.add_scan(Pose2D(0.51, 0.0, 0.41), scan, 0.5) is not None
+    assert slam.add_scan(Pose2D(0.51, 0.0, 0.41), scan, 1.0) is None
 
 
 def test_map_to_odom_makes_the_corrected_pose():
