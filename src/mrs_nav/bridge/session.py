@@ -11,7 +11,8 @@ from typing import Any
 
 import zenoh
 
-from mrs_nav.bridge.config import MAX_FILE_BYTES, zenoh_settings
+from mrs_nav.bridge.config import MAX_FILE_BYTES, BridgeConfig, zenoh_settings
+from mrs_nav.bridge.exposure import credentials, refuse_open_endpoints
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.textfiles import read_regular, read_text
 
@@ -114,6 +115,17 @@ def refuse_lowlatency(config: zenoh.Config, config_file: str = "") -> None:
             f"{source}: transport.unicast.lowlatency cannot carry messages above 64 KiB (a map) without dropping "
             "the link; the bridge needs the default transport"
         )
+
+
+def bridge_settings(config: BridgeConfig, inbound_md5: Mapping[str, str]) -> tuple[dict[str, Any], list[str]]:
+    """The bridge's Zenoh settings, its access control asking operators for every credential its Zenoh file
+    checks, and the warnings to give at every start for listen endpoints a network reaches without TLS and client
+    authentication; raise InvalidInputError for such an endpoint unless ``config.insecure``."""
+    plain = zenoh_config(
+        zenoh_settings(config.mode, config.listen, config.connect, config.retry_period), config.zenoh_config
+    )
+    warnings = refuse_open_endpoints(plain, config.insecure, "insecure: true")
+    return config.zenoh_settings(inbound_md5, credentials(plain)), warnings
 
 
 def open_session(settings: Mapping[str, Any], config_file: str = "") -> zenoh.Session:
