@@ -60,9 +60,11 @@ def _loopback(endpoint: str) -> bool:
     if host.lower() in _LOCAL_NAMES:
         return True
     try:
-        return ipaddress.ip_address(host).is_loopback
+        ip = ipaddress.ip_address(host)
     except ValueError:  # a host name: it may resolve to anything, now or later
         return False
+    mapped = ip.ipv4_mapped if isinstance(ip, ipaddress.IPv6Address) else None  # [::ffff:127.0.0.1]
+    return ip.is_loopback or (mapped is not None and mapped.is_loopback)
 
 
 def open_endpoints(config: zenoh.Config) -> list[str]:

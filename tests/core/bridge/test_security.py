@@ -253,6 +253,7 @@ def tls_file(tmp: Path, pki: Pki, *, mtls: bool = False, passwords: bool = False
         ("ws/0.0.0.0:7448", "", "without encryption"),
         ("udp/0.0.0.0:7447", "", "without encryption"),
         ("tcp/robot.example:7447", "", "without encryption"),
+        ("tcp/[::ffff:192.168.1.20]:7447", "", "without encryption"),
         ("tls/0.0.0.0:7447", "tls", "TLS without client authentication"),
     ],
 )
@@ -274,6 +275,8 @@ def test_a_listen_endpoint_open_to_the_network_is_refused_unless_insecure(
     [
         ("tcp/127.0.0.1:7447", ""),
         ("tcp/[::1]:7447", ""),
+        ("tcp/[::ffff:127.0.0.1]:7447", ""),
+        ("tcp/127.0.0.2:7447", ""),
         ("ws/localhost:7448", ""),
         ("unixsock-stream/tmp/robot.sock", ""),
         ("tls/0.0.0.0:7447", "mtls"),
