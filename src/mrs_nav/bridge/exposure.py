@@ -20,7 +20,7 @@ from mrs_nav.errors import InvalidInputError
 if TYPE_CHECKING:  # only configurations are passed in: the configuration module loads no Zenoh through this one
     import zenoh
 
-_SECURE = ("tls/", "quic/")
+TLS_PROTOCOLS = ("tls/", "quic/")  # endpoint prefixes of the encrypted links
 _LOCAL_NAMES = ("localhost",)
 
 
@@ -38,16 +38,18 @@ def _setting(config: zenoh.Config, path: str) -> Any:
 def credentials(config: zenoh.Config) -> frozenset[Credential]:
     """The credentials clients must present to ``config``'s listen endpoints."""
     found = set()
-    if _setting(config, "transport/link/tls/enable_mtls") and any(e.startswith(_SECURE) for e in listen(config)):
+    tls_listeners = [e for e in endpoints(config) if e.startswith(TLS_PROTOCOLS)]
+    if _setting(config, "transport/link/tls/enable_mtls") and tls_listeners:
         found.add(Credential.CERTIFICATE)
     if _setting(config, "transport/auth/usrpwd/dictionary_file"):
         found.add(Credential.PASSWORD)
     return frozenset(found)
 
 
-def listen(config: zenoh.Config) -> list[str]:
-    """``config``'s listen endpoints (a router or peer may give them per mode: every mode's are counted)."""
-    value = _setting(config, "listen/endpoints")
+def endpoints(config: zenoh.Config, kind: str = "listen") -> list[str]:
+    """``config``'s ``kind`` (listen, connect) endpoints (a router or peer may give them per mode: every mode's are
+    counted)."""
+    value = _setting(config, f"{kind}/endpoints")
     items = value.values() if isinstance(value, dict) else [value]
     return [e for group in items for e in (group if isinstance(group, list) else [group])]
 
@@ -71,10 +73,10 @@ def open_endpoints(config: zenoh.Config) -> list[str]:
     """One line per listen endpoint of ``config`` that a network can reach without a client credential."""
     authenticated = bool(credentials(config))
     found = []
-    for endpoint in listen(config):
+    for endpoint in endpoints(config):
         if _loopback(endpoint):
             continue
-        if not endpoint.startswith(_SECURE):
+        if not endpoint.startswith(TLS_PROTOCOLS):
             found.append(f"{endpoint} is reachable from the network without encryption or client authentication")
         elif not authenticated:
             found.append(
