@@ -119,6 +119,8 @@ class LocalisationNode:
         self._covariance: FloatArray | None = None  # of the last published pose
         self._last_clock = -math.inf
         self._pose_saved_at = -math.inf  # sim time the pose was last stored on the parameter server
+        self._pose_to_store: dict[str, float] = {}
+        self._store_wanted = threading.Event()
         self._reset_stamp = rospy.Time(0)  # scans stamped before the last reset of the belief are not used
         self._buffer = tf2_ros.Buffer(cache_time=rospy.Duration(30.0))
         self._listener = tf2_ros.TransformListener(self._buffer)
@@ -133,6 +135,8 @@ class LocalisationNode:
             threading.Thread(target=self._request_map, name="static_map", daemon=True).start()
         self._scan_sub = rospy.Subscriber("scan", LaserScan, self._on_scan, queue_size=2)
         self._timer = rospy.Timer(rospy.Duration(config.transform_publish_period), self._publish_transform)
+        # Six calls to the master per save: made from a thread of their own, never holding up a scan.
+        threading.Thread(target=self._store_poses, name="save_pose", daemon=True).start()
 
     # -- inputs ---------------------------------------------------------------------------------------------------
 
@@ -266,15 +270,23 @@ class LocalisationNode:
             return  # abs: sim time may have gone back
         self._pose_saved_at = now
         pose = correction.compose(odom)
-        values = {
+        self._pose_to_store = {
             "initial_pose_x": pose.x, "initial_pose_y": pose.y, "initial_pose_a": pose.yaw,
             "initial_cov_xx": cov[0, 0], "initial_cov_yy": cov[1, 1], "initial_cov_aa": cov[2, 2],
         }  # fmt: skip
-        try:
-            for name, value in values.items():
-                rospy.set_param(f"~{name}", float(value))
-        except (OSError, rospy.ROSException) as err:  # the master is away for a moment: the next save retries
-            rospy.logwarn_throttle(5.0, f"localisation: cannot store the pose on the parameter server: {err}")
+        self._store_wanted.set()
+
+    def _store_poses(self) -> None:
+        """Write the latest pose to store onto the parameter server whenever there is one (the latest wins)."""
+        while not rospy.is_shutdown():
+            if not self._store_wanted.wait(1.0):
+                continue
+            self._store_wanted.clear()
+            try:
+                for name, value in self._pose_to_store.items():
+                    rospy.set_param(f"~{name}", float(value))
+            except (OSError, rospy.ROSException) as err:  # the master is away for a moment: the next save retries
+                rospy.logwarn_throttle(5.0, f"localisation: cannot store the pose on the parameter server: {err}")
 
     def _publish_transform(self, _event: Any) -> None:
         correction = self._map_to_odom
