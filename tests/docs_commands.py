@@ -201,9 +201,9 @@ COMMANDS: dict[str, Entry] = {
     "roslaunch mrs_nav multi_robot.launch robots:=2 real_time_factor:=0 lockstep:=true rviz:=false": Covered(
         "tests/ros/test_multi_robot.py::test_two_robots_with_crossing_goals_reach_them_without_contact"
     ),
-    "mrs-nav router --listen tcp/0.0.0.0:7447": Covered(
+    "mrs-nav router --listen tls/0.0.0.0:7447 --zenoh-config router.json5": Covered(
         "tests/core/cli/test_router.py::test_clients_of_the_router_reach_each_other_and_sigterm_stops_it",
-        "on 127.0.0.1",
+        "on 127.0.0.1 over tcp; the TLS configuration as tests/ros/test_zenoh_network.py makes it",
     ),
     "roslaunch mrs_nav zenoh_bridge.launch mode:=client listen:= connect:=tcp/ROUTER:7447 namespace:=tb3_0 "
     "node_name:=zenoh_bridge_tb3_0": Covered(_FLEET_MONITOR, "three namespaces on one master, the test's router"),

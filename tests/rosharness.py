@@ -184,6 +184,15 @@ def last_warnings(launch_logs: Path, per_node: int = 2) -> list[str]:
     return out
 
 
+def node_pid(master: RosMaster, node: str) -> int:
+    """The process id of the registered ROS node ``node`` (from its own XML-RPC server)."""
+    code, _, uri = xmlrpc.client.ServerProxy(master.uri).lookupNode("/pytest", node)
+    assert code == 1, f"node {node} is not registered"
+    code, _, pid = xmlrpc.client.ServerProxy(uri).getPid("/pytest")
+    assert code == 1
+    return int(pid)
+
+
 class RosMaster:
     """A roscore on a free loopback port, with its logs under ``log_dir``."""
 

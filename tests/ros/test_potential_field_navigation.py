@@ -15,7 +15,7 @@ from tests.rosharness import RosMaster, wait_for
 pytestmark = pytest.mark.ros
 
 # Sim time at max rate, in lockstep: the simulator never runs more than one control period past the last
-# /cmd_vel, so the 10 Hz controller (and its 0.5 s command watchdog) keeps up however fast the machine is.
+# /cmd_vel, so the 10 Hz controller (and the simulator's 0.3 s command watchdog) keeps up however fast the machine is.
 MAX_RATE = ("real_time_factor:=0", "lockstep:=true")
 SIM_TIME_BOUND = 90.0  # s, the core tests take 30-55 s
 

@@ -6,7 +6,6 @@ from __future__ import annotations
 import json
 import os
 import signal
-import xmlrpc.client
 from pathlib import Path
 from typing import Any
 
@@ -16,21 +15,13 @@ from mrs_nav.bag.io import bag_topics, read_messages
 from mrs_nav.bag.salvage import readable_bag, salvage_bag
 from mrs_nav.cli.main import main
 from mrs_nav.errors import BagError
-from tests.rosharness import RosMaster, wait_for
+from tests.rosharness import RosMaster, node_pid, wait_for
 
 pytestmark = pytest.mark.ros
 
 # Topics the simulator alone publishes (no SLAM, no navigation in this test).
 MIN_SCANS = 10  # on disk before the recording is stopped
 SIM_TOPICS = {"/scan", "/odom", "/tf", "/tf_static", "/clock", "/ground_truth/odom"}
-
-
-def _node_pid(master: RosMaster, node: str) -> int:
-    code, _, uri = xmlrpc.client.ServerProxy(master.uri).lookupNode("/pytest", node)
-    assert code == 1, f"node {node} is not registered"
-    code, _, pid = xmlrpc.client.ServerProxy(uri).getPid("/pytest")
-    assert code == 1
-    return int(pid)
 
 
 def _scans_on_disk(active: Path, probe: Path) -> int:
@@ -70,7 +61,7 @@ def _record(master: RosMaster, rospy: Any, bag: Path, options: str, *, kill: boo
                 probe = bag.with_name(f"{bag.stem}-probe.bag")
                 wait_for(lambda: turned() and _scans_on_disk(written, probe) >= MIN_SCANS, 120.0, "scans on disk", 0.5)
                 if kill:
-                    os.kill(_node_pid(master, "/record"), signal.SIGKILL)
+                    os.kill(node_pid(master, "/record"), signal.SIGKILL)
     finally:
         cmd.unregister()
 

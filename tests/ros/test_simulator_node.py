@@ -133,7 +133,7 @@ def test_cmd_vel_moves_the_robot_and_the_watchdog_stops_it(simulation: Any) -> N
         forward.linear.x = 0.2
 
         def moved() -> bool:
-            pub.publish(forward)  # re-sent every few wall ms: well within the 0.5 s watchdog at any sim speed
+            pub.publish(forward)  # re-sent every few wall ms: well within the 0.3 s watchdog at any sim speed
             time.sleep(0.002)
             return bool(truth.last.pose.pose.position.x > start_x + 0.3)
 
@@ -144,7 +144,7 @@ def test_cmd_vel_moves_the_robot_and_the_watchdog_stops_it(simulation: Any) -> N
         wait_for(lambda: rospy.get_time() > last_command + 2.0, 60.0, "2 s of sim time without commands")
         final = truth.last
         assert abs(final.twist.twist.linear.x) < 0.01  # stopped
-        # at most the 0.5 s watchdog at 0.2 m/s, plus the message's flight time at maximum sim speed
+        # at most the 0.3 s watchdog at 0.2 m/s and its brake, plus the message's flight time at maximum sim speed
         assert final.pose.pose.position.x - x_at_last_command < 0.2
     finally:
         pub.unregister()

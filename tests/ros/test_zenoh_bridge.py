@@ -18,6 +18,7 @@ import zenoh
 import zenoh.ext
 
 from mrs_nav.bridge.decoder import MessageDecoder
+from mrs_nav.bridge.keys import publish_key
 from mrs_nav.bridge.monitor import serialize_goal
 from mrs_nav.bridge.session import open_client_session
 from mrs_nav.bridge.wire import decode_attachment, decode_definition, encoding_text, schema_of
@@ -29,6 +30,7 @@ from tests.ros.zenoh_harness import (
     mrs_nav,
     serialized,
     start_bridge,
+    status,
     wait_bridge_up,
 )
 from tests.rosharness import RosMaster, free_port, wait_for
@@ -36,6 +38,7 @@ from tests.rosharness import RosMaster, free_port, wait_for
 pytestmark = pytest.mark.ros
 
 GOAL = "/move_base_simple/goal"
+PUBLISH_GOAL = publish_key("mrs_nav", GOAL)
 
 
 @pytest.fixture(scope="module")
@@ -234,6 +237,40 @@ def test_a_malformed_payload_is_dropped_with_a_log_line_and_the_bridge_keeps_run
         session.close()
         sub.unregister()
     assert [(g.pose.position.x, g.pose.position.y) for g in goals] == [(0.5, 0.25)]
+
+
+def test_a_goal_stamped_an_hour_ago_or_in_the_future_is_dropped_and_counted(routed: Bridge, rospy_node: Any) -> None:
+    goals, sub = goal_recorder(rospy_node)
+    session = open_client_session([routed.endpoint], mode="client")
+    encoding = zenoh.Encoding(encoding_text("geometry_msgs/PoseStamped"))
+    hour_ago, ahead = time.time_ns() - 3600 * 10**9, time.time_ns() + 60 * 10**9
+    try:
+        pub = session.declare_publisher("mrs_nav/move_base_simple/goal", encoding=encoding)
+        wait_for(lambda: sub.get_num_connections() > 0, 15, "the bridge's goal publisher in ROS")
+        wait_for(lambda: pub.matching_status.matching, 15, "the bridge's goal subscriber on Zenoh")
+        dropped_before = status(session)["inbound"][GOAL]["dropped"]
+        pub.put(serialize_goal(2.0, 2.0, 0.0, stamp_ns=hour_ago))  # captured an hour ago, replayed now
+        pub.put(serialize_goal(3.0, 3.0, 0.0, stamp_ns=ahead))
+        answers = [
+            list(session.get(PUBLISH_GOAL, payload=serialize_goal(4.0, 4.0, 0.0, stamp_ns=s), encoding=encoding))
+            for s in (hour_ago, ahead)
+        ]
+        wait_for(lambda: status(session)["inbound"][GOAL]["dropped"] == dropped_before + 4, 10, "4 goals counted")
+        time.sleep(1.0 / 2.0)  # goals are limited to 2 Hz: one period since the last test's
+        sent_at = rospy_node.get_rostime()
+        pub.put(serialize_goal(0.75, 0.5, 0.0))  # stamped now: taken
+        wait_for(lambda: len(goals) >= 1, 10, "the fresh goal")
+        time.sleep(0.5)  # absence of the stale ones: anything in flight arrives
+    finally:
+        session.close()
+        sub.unregister()
+    assert [(g.pose.position.x, g.pose.position.y) for g in goals] == [(0.75, 0.5)]
+    assert goals[0].header.stamp >= sent_at  # restamped with the robot's ROS time
+    errors = [r.err.payload.to_string() for replies in answers for r in replies if r.err is not None]
+    assert len(errors) == 2
+    assert "stamped 3600" in errors[0]
+    assert "older than its max_age 5 s" in errors[0]
+    assert "in the future, beyond the 0.5 s clock tolerance" in errors[1]
 
 
 def test_restarting_the_router_or_the_remote_peer_loses_nothing_in_ros_and_the_flow_resumes(

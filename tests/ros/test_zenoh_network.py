@@ -22,10 +22,10 @@ from mrs_nav.bridge.certs import make_ca, make_cert
 from mrs_nav.bridge.keys import publish_key, status_key
 from mrs_nav.bridge.monitor import serialize_goal
 from mrs_nav.bridge.session import open_client_session
-from mrs_nav.bridge.wire import decode_status, encoding_text
+from mrs_nav.bridge.wire import encoding_text
 from mrs_nav.ros_processes import process, wait_for_master
 from tests.core.bridge.test_security import Pki, client_file
-from tests.ros.zenoh_harness import Collector, Ticker, mrs_nav, start_bridge, wait_bridge_up
+from tests.ros.zenoh_harness import Collector, Ticker, mrs_nav, start_bridge, status, wait_bridge_up
 from tests.rosharness import REPO, RosMaster, free_port, ros_env, stop, wait_for
 
 pytestmark = pytest.mark.ros
@@ -40,13 +40,6 @@ def bridge_process(env: dict[str, str], tmp: Path, name: str, config: dict[str, 
     path.write_text(json.dumps({"discovery_period": 0.2, **config}))
     cmd = [sys.executable, str(REPO / "scripts" / "zenoh_bridge"), f"__name:={name}", f"_config_file:={path}"]
     return process(cmd, env, tmp / f"{name}.log", grace=10.0)
-
-
-def status(session: zenoh.Session) -> dict[str, Any]:
-    for reply in session.get(status_key("mrs_nav"), timeout=2.0):
-        if reply.ok is not None:
-            return decode_status(reply.ok.payload.to_bytes())
-    raise AssertionError("the bridge did not answer its status")
 
 
 def test_secured_bridge_as_the_robots_router(ros_master: RosMaster, rospy_node: Any, tmp_path: Path) -> None:
@@ -121,6 +114,19 @@ def test_secured_bridge_as_the_robots_router(ros_master: RosMaster, rospy_node: 
     assert plain.returncode == 1
     assert plain.stderr.startswith("ERROR: cannot open a Zenoh session")
     assert len(plain.stderr.strip().splitlines()) == 1
+
+
+def test_a_bridge_listening_open_to_the_network_does_not_start(ros_master: RosMaster, tmp_path: Path) -> None:
+    """The README's old fleet recipe (plain TCP on every interface, goals allowed): one FATAL line, exit 1, and
+    no socket opened (the refusal comes before the session)."""
+    config = {"listen": ["tcp/0.0.0.0:7447"], "inbound": [GOAL_RULE]}
+    with bridge_process(ros_master.env, tmp_path, "zb_open", config) as bridge:
+        assert bridge.wait(timeout=60) == 1
+    log = (tmp_path / "zb_open.log").read_text()
+    fatal = [line for line in log.splitlines() if "[FATAL]" in line]
+    assert len(fatal) == 1, log
+    assert "listen endpoint tcp/0.0.0.0:7447 is reachable from the network without encryption" in fatal[0]
+    assert "insecure: true" in fatal[0]
 
 
 def test_memory_stays_bounded_under_refused_and_oversized_queries(

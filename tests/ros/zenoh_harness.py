@@ -17,6 +17,7 @@ from typing import Any
 import zenoh
 
 from mrs_nav.bridge.keys import status_key
+from mrs_nav.bridge.wire import decode_status
 from tests.rosharness import REPO, RosMaster, free_port, stop, wait_for
 
 
@@ -34,6 +35,14 @@ def start_bridge(ros_master: RosMaster, tmp: Path, name: str, config: dict[str, 
     path = tmp / f"{name}.yaml"
     path.write_text(json.dumps({"discovery_period": 0.2, **config}))  # JSON is YAML
     return ros_master.launch("zenoh_bridge.launch", f"config_file:={path}", f"node_name:={name}", *args, name=name)
+
+
+def status(session: zenoh.Session) -> dict[str, Any]:
+    """The bridge's ``@bridge/status`` answer."""
+    for reply in session.get(status_key("mrs_nav"), timeout=2.0):
+        if reply.ok is not None:
+            return decode_status(reply.ok.payload.to_bytes())
+    raise AssertionError("the bridge did not answer its status")
 
 
 def wait_bridge_up(session: zenoh.Session, proc: Any, what: str) -> None:

@@ -2,8 +2,10 @@
 
 The bridge is the only writer of its robot's keys: remote sessions may subscribe, query definitions, the
 bridge's status and the late-joiner caches, and watch liveliness tokens, but the only things they may put or
-query into are the inbound keys the allow-list names, and only subjects named in ``operators`` (Zenoh
-usernames or TLS certificate common names) may do that when the list is not empty. Everything else a remote
+query into are the inbound keys the allow-list names, and only operators may do that when ``operators`` is not
+empty: a session whose every credential the configuration checks names an operator (its username when
+passwords are checked, its certificate's common name when client certificates are, both when both are; a
+viewer's certificate with an operator's password is no operator). Everything else a remote
 session sends on these keys (a forged ``/odom``, a forged liveliness token) is dropped by Zenoh at ingress,
 before it reaches the bridge or, when the bridge is the robot's router, any other subscriber.
 
@@ -13,9 +15,10 @@ bridge's ``@types`` / ``@bridge`` services are named explicitly.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Collection, Iterable
 from typing import Any
 
+from mrs_nav.bridge.exposure import Credential
 from mrs_nav.bridge.keys import (
     STATUS_SUFFIX,
     KeyLayout,
@@ -25,6 +28,7 @@ from mrs_nav.bridge.keys import (
     services_pattern,
     topic_key,
 )
+from mrs_nav.errors import InvalidInputError
 
 # Zenoh's ACL message kinds (zenoh 1.x).
 _ALL = [
@@ -35,12 +39,18 @@ _OBSERVE = ["declare_subscriber", "query", "declare_liveliness_subscriber", "liv
 
 
 def access_control(
-    prefix: str, layout: KeyLayout, inbound: Iterable[tuple[str, str, str]], operators: Iterable[str] = ()
+    prefix: str,
+    layout: KeyLayout,
+    inbound: Iterable[tuple[str, str, str]],
+    operators: Iterable[str] = (),
+    credentials: Collection[Credential] = (),
 ) -> dict[str, Any]:
     """Zenoh's ``access_control`` value for a bridge with key prefix ``prefix``.
 
-    ``inbound`` holds (topic, ROS type, md5) of each allow-listed inbound topic; ``operators`` the usernames
-    or certificate common names allowed to send them (empty: any session that can connect).
+    ``inbound`` holds (topic, ROS type, md5) of each allow-listed inbound topic; ``operators`` the names allowed
+    to send them (empty: any session that can connect), each checked as every one of ``credentials`` (what the
+    Zenoh configuration checks: usernames, certificate common names) at once. Raise InvalidInputError when
+    operators are named and no credential is checked: nobody could be told from anybody else.
     """
     data = [data_pattern(prefix, layout), f"{data_pattern(prefix, layout)}/@adv/**"]
     services = services_pattern(prefix)
@@ -59,11 +69,19 @@ def access_control(
     subjects: list[dict[str, Any]] = [{"id": "anyone"}]
     senders = ["anyone"]
     if operators:
-        subjects += [
-            {"id": "operator_users", "usernames": operators},
-            {"id": "operator_certs", "cert_common_names": operators},
-        ]
-        senders = ["operator_users", "operator_certs"]
+        if not credentials:
+            raise InvalidInputError(
+                f"operators {operators}: the Zenoh configuration checks no credential to tell them by; set "
+                "transport.auth.usrpwd.dictionary_file and/or transport.link.tls.enable_mtls on a tls/ endpoint"
+            )
+        # One subject naming both: Zenoh matches a subject only when all its properties match (AND).
+        operator: dict[str, Any] = {"id": "operators"}
+        if Credential.PASSWORD in credentials:
+            operator["usernames"] = operators
+        if Credential.CERTIFICATE in credentials:
+            operator["cert_common_names"] = operators
+        subjects.append(operator)
+        senders = ["operators"]
     rules: list[dict[str, Any]] = [
         {"id": "bridge_out", "messages": _ALL, "flows": ["egress"], "permission": "allow", "key_exprs": outgoing},
         {"id": "observe", "messages": _OBSERVE, "flows": ["ingress"], "permission": "allow", "key_exprs": observed},

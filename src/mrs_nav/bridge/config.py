@@ -16,11 +16,12 @@ import functools
 import ipaddress
 import math
 import re
-from collections.abc import Iterable, Mapping
+from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 from mrs_nav.bridge.acl import access_control
+from mrs_nav.bridge.exposure import Credential
 from mrs_nav.bridge.keys import KeyLayout, check_topic, check_type, robot_prefix
 from mrs_nav.config_files import node_default
 from mrs_nav.errors import InvalidInputError
@@ -36,6 +37,13 @@ DEFAULT_LAYOUT = KeyLayout(_default("layout"))
 # often per topic (a person clicking goals) unless its rule says otherwise.
 DEFAULT_INBOUND_BYTES = 1024
 DEFAULT_INBOUND_RATE = 2.0
+# An inbound message's header stamp (the sender's clock, seconds since the epoch) may be this old on the bridge's
+# clock: a goal crosses a network in milliseconds and a congested or briefly lost link (Zenoh reconnects within
+# retry_period, 1 s) delays it by a second or two, while a goal recorded and replayed later, or one that waited
+# in a queue while the robot moved on, is refused. Machines that command a robot keep their clocks in step
+# (NTP agrees to milliseconds), so a stamp may lead the bridge's clock by CLOCK_TOLERANCE_S at most.
+DEFAULT_INBOUND_AGE = 5.0
+CLOCK_TOLERANCE_S = 0.5
 # The files the bridge, router and monitor read (bridge YAML, Zenoh JSON5, PEM certificates, keys and CA bundles,
 # password dictionaries): a few KB each, and a whole public CA bundle is about 200 KB.
 MAX_FILE_BYTES = 1 << 20
@@ -106,14 +114,16 @@ class TopicFilter:
 
 @dataclass(frozen=True)
 class InboundRule:
-    """A topic remote peers may publish into ROS, its only accepted type, and the frame its header must
-    name (empty: not checked)."""
+    """A topic remote peers may publish into ROS, its only accepted type, the frame its header must name (empty:
+    not checked), and the largest age in s of its header stamp on the bridge's clock (messages without a header
+    are not aged)."""
 
     topic: str
     type: str
     frame: str = ""
     max_bytes: int = DEFAULT_INBOUND_BYTES
     max_rate: float = DEFAULT_INBOUND_RATE
+    max_age: float = DEFAULT_INBOUND_AGE
 
     def __post_init__(self) -> None:
         check_topic(self.topic)
@@ -122,6 +132,8 @@ class InboundRule:
             raise InvalidInputError(f"inbound {self.topic} max_bytes {self.max_bytes!r}: expected bytes > 0")
         if not math.isfinite(self.max_rate) or self.max_rate <= 0:
             raise InvalidInputError(f"inbound {self.topic} max_rate {self.max_rate!r}: expected a rate > 0 Hz")
+        if not math.isfinite(self.max_age) or self.max_age <= 0:
+            raise InvalidInputError(f"inbound {self.topic} max_age {self.max_age!r}: expected an age > 0 s")
 
 
 @dataclass(frozen=True)
@@ -134,7 +146,9 @@ class BridgeConfig:
     next reconnection attempt. ``zenoh_config`` names a Zenoh JSON5 file (TLS, authentication, ...) whose
     settings the bridge's own (mode, endpoints, scouting) are laid over; ``acl`` adds the bridge's access
     control (:mod:`mrs_nav.bridge.acl`), ``operators`` naming who may send inbound messages (Zenoh usernames
-    or certificate common names; empty: anyone who can connect).
+    or certificate common names, each checked as every credential the Zenoh configuration checks; empty: anyone
+    who can connect). ``insecure`` lets the bridge listen where a network reaches it without TLS and client
+    authentication (:mod:`mrs_nav.bridge.exposure`), warned at every start.
     """
 
     mode: str = _default("mode")
@@ -152,6 +166,7 @@ class BridgeConfig:
     zenoh_config: str = _default("zenoh_config")
     acl: bool = _default("acl")
     operators: tuple[str, ...] = tuple(_default("operators"))
+    insecure: bool = _default("insecure")
     _rates: tuple[tuple[re.Pattern[str], float], ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -215,13 +230,18 @@ class BridgeConfig:
         """The rule allowing ``topic`` in, or None when remote peers may not publish it."""
         return next((rule for rule in self.inbound if rule.topic == topic), None)
 
-    def zenoh_settings(self, inbound_md5: Mapping[str, str]) -> dict[str, Any]:
+    def zenoh_settings(
+        self, inbound_md5: Mapping[str, str], credentials: Collection[Credential] = ()
+    ) -> dict[str, Any]:
         """Zenoh configuration entries (path -> JSON value) for this bridge (see :func:`zenoh_settings`), with
-        its access control; ``inbound_md5`` maps inbound topics to their md5 sums."""
+        its access control; ``inbound_md5`` maps inbound topics to their md5 sums, ``credentials`` are those the
+        Zenoh file checks (:func:`mrs_nav.bridge.exposure.credentials`), each of which an operator must pass."""
         settings = zenoh_settings(self.mode, self.listen, self.connect, self.retry_period)
         if self.acl:
             inbound = [(rule.topic, rule.type, inbound_md5.get(rule.topic, "")) for rule in self.inbound]
-            settings["access_control"] = access_control(self.key_prefix, self.layout, inbound, self.operators)
+            settings["access_control"] = access_control(
+                self.key_prefix, self.layout, inbound, self.operators, credentials
+            )
         return settings
 
     @classmethod
@@ -230,6 +250,7 @@ class BridgeConfig:
         known = {
             "mode", "listen", "connect", "prefix", "namespace", "layout", "allow", "deny", "max_rates",
             "default_max_rate", "inbound", "discovery_period", "retry_period", "zenoh_config", "acl", "operators",
+            "insecure",
         }  # fmt: skip
         unknown = sorted(set(params) - known - {"config_file"})
         if unknown:
@@ -244,10 +265,11 @@ class BridgeConfig:
         for key in ("default_max_rate", "discovery_period", "retry_period"):
             if key in params:
                 kwargs[key] = _number(params[key], key)
-        if "acl" in params:
-            if not isinstance(params["acl"], bool):
-                raise InvalidInputError(f"acl: expected true or false, got {params['acl']!r}")
-            kwargs["acl"] = params["acl"]
+        for key in ("acl", "insecure"):
+            if key in params:
+                if not isinstance(params[key], bool):
+                    raise InvalidInputError(f"{key}: expected true or false, got {params[key]!r}")
+                kwargs[key] = params[key]
         if "layout" in params:
             try:
                 kwargs["layout"] = KeyLayout(params["layout"])
@@ -335,10 +357,10 @@ def _rule(item: Any) -> InboundRule:
     type_name = _text(item.get("type", default_type[0]), f"inbound {topic} type")
     if not type_name:
         raise InvalidInputError(f"inbound {topic}: name its message type (type: pkg/Type)")
-    unknown = sorted(set(item) - {"topic", "type", "frame", "max_bytes", "max_rate"})
+    unknown = sorted(set(item) - {"topic", "type", "frame", "max_bytes", "max_rate", "max_age"})
     if unknown:
         raise InvalidInputError(
-            f"inbound {topic}: unknown key(s) {unknown}; known: topic, type, frame, max_bytes, max_rate"
+            f"inbound {topic}: unknown key(s) {unknown}; known: topic, type, frame, max_bytes, max_rate, max_age"
         )
     return InboundRule(
         topic,
@@ -346,6 +368,7 @@ def _rule(item: Any) -> InboundRule:
         _text(item.get("frame", default_type[1]), f"inbound {topic} frame"),
         _integer(item.get("max_bytes", DEFAULT_INBOUND_BYTES), f"inbound {topic} max_bytes"),
         _number(item.get("max_rate", DEFAULT_INBOUND_RATE), f"inbound {topic} max_rate"),
+        _number(item.get("max_age", DEFAULT_INBOUND_AGE), f"inbound {topic} max_age"),
     )
 
 

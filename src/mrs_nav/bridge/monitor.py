@@ -238,13 +238,15 @@ class RemoteMonitor:
         return self._session
 
 
-def serialize_goal(x: float, y: float, yaw: float, frame: str = "map") -> bytes:
-    """ROS 1 bytes of a geometry_msgs/PoseStamped goal at (x, y) m, heading ``yaw`` rad, in ``frame``."""
+def serialize_goal(x: float, y: float, yaw: float, frame: str = "map", stamp_ns: int | None = None) -> bytes:
+    """ROS 1 bytes of a geometry_msgs/PoseStamped goal at (x, y) m, heading ``yaw`` rad, in ``frame``, stamped
+    ``stamp_ns`` (ns since the epoch; default now: the bridge refuses goals older than a few seconds)."""
     store = noetic_store()
     types = store.types
     qx, qy, qz, qw = quaternion_from_yaw(yaw)
+    sec, nanosec = divmod(time.time_ns() if stamp_ns is None else stamp_ns, 1_000_000_000)
     msg = types["geometry_msgs/msg/PoseStamped"](
-        types["std_msgs/msg/Header"](0, types["builtin_interfaces/msg/Time"](0, 0), frame),
+        types["std_msgs/msg/Header"](0, types["builtin_interfaces/msg/Time"](sec, nanosec), frame),
         types["geometry_msgs/msg/Pose"](
             types["geometry_msgs/msg/Point"](x, y, 0.0), types["geometry_msgs/msg/Quaternion"](qx, qy, qz, qw)
         ),

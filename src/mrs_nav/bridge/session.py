@@ -11,11 +11,11 @@ from typing import Any
 
 import zenoh
 
-from mrs_nav.bridge.config import MAX_FILE_BYTES, zenoh_settings
+from mrs_nav.bridge.config import MAX_FILE_BYTES, BridgeConfig, zenoh_settings
+from mrs_nav.bridge.exposure import TLS_PROTOCOLS, credentials, endpoints, refuse_open_endpoints
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.textfiles import read_regular, read_text
 
-_SECURE = ("tls/", "quic/")
 _TLS_FILES = ("root_ca_certificate", "listen_certificate", "listen_private_key", "connect_certificate",
               "connect_private_key")  # fmt: skip
 # What zenoh-python's errors carry besides the message: the Rust source line that raised it, and the parsers'
@@ -68,22 +68,16 @@ def zenoh_config(settings: Mapping[str, Any], config_file: str = "") -> zenoh.Co
 def _check_security(config: zenoh.Config, config_file: str) -> None:
     """TLS endpoints need their certificates; the certificate, key and password files must be readable."""
 
-    def endpoints(kind: str) -> list[str]:
-        value = json.loads(config.get_json(f"{kind}/endpoints"))
-        # A router or peer may give endpoints per mode: {"router": [...], "peer": [...]}.
-        items = value.values() if isinstance(value, dict) else [value]
-        return [e for group in items for e in (group if isinstance(group, list) else [group])]
-
     tls = json.loads(config.get_json("transport/link/tls"))
     source = f"zenoh_config {config_file}" if config_file else "no zenoh_config file"
-    for endpoint in endpoints("listen"):
+    for endpoint in endpoints(config, "listen"):
         missing = [k for k in ("listen_certificate", "listen_private_key") if not tls.get(k)]
-        if endpoint.startswith(_SECURE) and missing:
+        if endpoint.startswith(TLS_PROTOCOLS) and missing:
             raise InvalidInputError(
                 f"listen endpoint {endpoint} needs transport.link.tls.{' and '.join(missing)} ({source} sets none)"
             )
-    for endpoint in endpoints("connect"):
-        if endpoint.startswith(_SECURE) and not tls.get("root_ca_certificate"):
+    for endpoint in endpoints(config, "connect"):
+        if endpoint.startswith(TLS_PROTOCOLS) and not tls.get("root_ca_certificate"):
             raise InvalidInputError(
                 f"connect endpoint {endpoint} needs transport.link.tls.root_ca_certificate ({source} sets none)"
             )
@@ -114,6 +108,17 @@ def refuse_lowlatency(config: zenoh.Config, config_file: str = "") -> None:
             f"{source}: transport.unicast.lowlatency cannot carry messages above 64 KiB (a map) without dropping "
             "the link; the bridge needs the default transport"
         )
+
+
+def bridge_settings(config: BridgeConfig, inbound_md5: Mapping[str, str]) -> tuple[dict[str, Any], list[str]]:
+    """The bridge's Zenoh settings, its access control asking operators for every credential its Zenoh file
+    checks, and the warnings to give at every start for listen endpoints a network reaches without TLS and client
+    authentication; raise InvalidInputError for such an endpoint unless ``config.insecure``."""
+    plain = zenoh_config(
+        zenoh_settings(config.mode, config.listen, config.connect, config.retry_period), config.zenoh_config
+    )
+    warnings = refuse_open_endpoints(plain, config.insecure, "insecure: true")
+    return config.zenoh_settings(inbound_md5, credentials(plain)), warnings
 
 
 def open_session(settings: Mapping[str, Any], config_file: str = "") -> zenoh.Session:

@@ -76,7 +76,13 @@ def register(subparsers: Any) -> None:
     parser.add_argument(
         "--snapshot", type=Path, default=None, metavar="PNG", help="draw map, robot and path into this PNG file"
     )
-    parser.add_argument("--send-goal", default=None, metavar="X,Y,YAW", help="ask the bridge to publish this goal")
+    parser.add_argument(
+        "--send-goal",
+        default=None,
+        metavar="X,Y,YAW",
+        help="ask the bridge to publish this goal (stamped with this machine's clock: the bridge refuses a goal "
+        "older than its max_age, 5 s by default, or ahead of its clock by more than 0.5 s; keep the clocks in sync)",
+    )
     parser.add_argument("--frame", default="map", help="frame of --send-goal (default: map)")
     parser.add_argument("--timeout", type=_TIMEOUT, default=2.0, metavar="S", help="query timeout, s (default 2)")
     parser.set_defaults(handler=run)

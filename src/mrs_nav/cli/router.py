@@ -3,6 +3,7 @@
 Each robot's bridge connects to it as a client (``mode: client``, ``connect: [tcp/ROUTER:7447]``) and so does
 ``mrs-nav monitor --fleet``; the router forwards between them. It is the Zenoh library's own router mode, with
 multicast scouting off like every session mrs_nav opens; TLS, users and the rest come from ``--zenoh-config``.
+An endpoint a network reaches without TLS and client authentication is refused unless ``--insecure``.
 """
 
 from __future__ import annotations
@@ -27,7 +28,13 @@ def register(subparsers: Any) -> None:
         action="append",
         default=None,
         metavar="ENDPOINT",
-        help="Zenoh endpoint to listen on (repeatable; default tcp/127.0.0.1:7447; tcp/0.0.0.0:7447 for a network)",
+        help="Zenoh endpoint to listen on (repeatable; default tcp/127.0.0.1:7447; for a network "
+        "tls/0.0.0.0:7447 with client certificates or passwords in --zenoh-config)",
+    )
+    parser.add_argument(
+        "--insecure",
+        action="store_true",
+        help="listen where a network reaches the router without TLS and client authentication (warned)",
     )
     parser.add_argument(
         "--zenoh-config",
@@ -44,12 +51,16 @@ def register(subparsers: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     # Imported here so that other commands do not load zenoh.
     from mrs_nav.bridge.config import DEFAULT_LISTEN, zenoh_settings  # noqa: PLC0415
-    from mrs_nav.bridge.session import open_session  # noqa: PLC0415
+    from mrs_nav.bridge.exposure import refuse_open_endpoints  # noqa: PLC0415
+    from mrs_nav.bridge.session import open_session, zenoh_config  # noqa: PLC0415
 
     listen = [e.strip() for item in args.listen or DEFAULT_LISTEN for e in item.split(",") if e.strip()]
     if not listen:
         raise InvalidInputError("--listen: give at least one endpoint, e.g. tcp/127.0.0.1:7447")
-    session = open_session(zenoh_settings("router", listen, []), args.zenoh_config)
+    settings = zenoh_settings("router", listen, [])
+    for warning in refuse_open_endpoints(zenoh_config(settings, args.zenoh_config), args.insecure, "--insecure"):
+        print(f"WARNING: {warning}", file=sys.stderr, flush=True)
+    session = open_session(settings, args.zenoh_config)
     print(f"zenoh router listening on {', '.join(listen)}", flush=True)
     try:
         threading.Event().wait()

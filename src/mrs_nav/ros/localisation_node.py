@@ -18,6 +18,12 @@ particles on the wrong place before the first true scan arrives.
 When sim time jumps backwards (a bag played again, the simulator restarted) the particles are kept, the tf
 buffer is cleared and map -> odom goes on from the new time (:mod:`mrs_nav.ros.clock_jump`).
 
+As AMCL does, the last published pose and its covariance are stored on the parameter server as
+``~initial_pose_x``, ``~initial_pose_y``, ``~initial_pose_a``, ``~initial_cov_xx``, ``~initial_cov_yy`` and
+``~initial_cov_aa`` at most ``~save_pose_rate`` times per second of sim time (<= 0: never), so that the node
+restarted under the same name (after a crash or ``kill -9``) resumes from where the robot was instead of from the
+launch pose: it reads those parameters at start.
+
 A scan or pose that cannot be used is logged (throttled) and skipped; the node never dies of one.
 """
 
@@ -67,6 +73,7 @@ class LocalisationNodeConfig:
     transform_publish_period: float = _default("transform_publish_period")
     tf_wait: float = _default("tf_wait")
     use_map_topic: bool = _default("use_map_topic")
+    save_pose_rate: float = _default("save_pose_rate")  # Hz of sim time; <= 0 never stores the pose
 
     def __post_init__(self) -> None:
         check_timing(self.transform_publish_period, transform_tolerance=self.transform_tolerance, tf_wait=self.tf_wait)
@@ -112,6 +119,10 @@ class LocalisationNode:
         self._pending_pose: tuple[Pose2D, FloatArray] | None = None
         self._mount: tuple[str, Pose2D] | None = None
         self._map_to_odom: Pose2D | None = None
+        self._covariance: FloatArray | None = None  # of the last published pose
+        self._pose_saved_at = -math.inf  # sim time the pose was last stored on the parameter server
+        self._pose_to_store: dict[str, float] = {}
+        self._store_wanted = threading.Event()
         self._reset_stamp = rospy.Time(0)  # scans stamped before the last reset of the belief are not used
         self._buffer = tf2_ros.Buffer(cache_time=rospy.Duration(30.0))
         self._listener = tf2_ros.TransformListener(self._buffer)
@@ -127,6 +138,8 @@ class LocalisationNode:
         self._scan_sub = rospy.Subscriber("scan", LaserScan, self._on_scan, queue_size=2)
         self._time_jump = TimeJumpGuard("localisation", self._on_time_jump, self._buffer)
         self._timer = self._time_jump.timer(config.transform_publish_period, self._publish_transform)
+        # Six calls to the master per save: made from a thread of their own, never holding up a scan.
+        threading.Thread(target=self._store_poses, name="save_pose", daemon=True).start()
 
     # -- inputs ---------------------------------------------------------------------------------------------------
 
@@ -169,6 +182,7 @@ class LocalisationNode:
                     # rviz stamps the pose when it is given; an unstamped or future one counts from now
                     now = rospy.Time.now()
                     self._reset_stamp = min(msg.header.stamp, now) if not msg.header.stamp.is_zero() else now
+                    self._covariance = None  # nothing stored until the filter has published from the new belief
                 self._pending_pose = (pose, cov)
         except MrsNavError as err:
             rospy.logwarn_throttle(5.0, f"localisation: ignoring initial pose: {err}")
@@ -180,6 +194,7 @@ class LocalisationNode:
             if self._filter is not None:
                 self._filter.global_localisation()
                 self._reset_stamp = rospy.Time.now()
+                self._covariance = None  # the stored pose stays the last one known until the filter converges
                 rospy.loginfo("localisation: particles spread over the free space")
             else:
                 rospy.logwarn("localisation: global_localization before any map; ignored")
@@ -196,11 +211,12 @@ class LocalisationNode:
                 pf = self._filter
                 if pf is None or stamp < self._reset_stamp:
                     return
-                if not pf.update(odom, scan):
-                    return
-                estimate = pf.estimate()
-                particles = pf.particles.copy()
-                self._map_to_odom = estimate.pose.compose(odom.inverse())
+                updated = pf.update(odom, scan)
+                if updated:
+                    estimate = pf.estimate()
+                    particles = pf.particles.copy()
+                    self._map_to_odom = estimate.pose.compose(odom.inverse())
+                    self._covariance = estimate.covariance
         except MrsNavError as err:
             rospy.logwarn_throttle(5.0, f"localisation: skipping scan at {stamp.to_sec():.3f}: {err}")
             return
@@ -213,7 +229,9 @@ class LocalisationNode:
                 f"({tf_state(self._buffer, self._listener)})",
             )
             return
-        self._publish_estimate(estimate, particles, stamp)
+        if updated:
+            self._publish_estimate(estimate, particles, stamp)
+        self._save_pose(odom, stamp.to_sec())
 
     def _on_time_jump(self, _seconds: float) -> str:
         """Sim time went back: broadcast from the new time on, and take scans whatever the date of the last
@@ -247,6 +265,34 @@ class LocalisationNode:
         cloud.header = msg.header
         cloud.poses = [pose_msg(Pose2D(float(x), float(y), float(a))) for x, y, a in particles]
         self._cloud_pub.publish(cloud)
+
+    def _save_pose(self, odom: Pose2D, now: float) -> None:
+        """Store the pose as AMCL does (``~initial_pose_*``, ``~initial_cov_*``), at most ``save_pose_rate`` Hz:
+        the robot's pose now (the last map->odom correction applied to the odometry of the latest scan, so that a
+        robot that moved since the last filter update is stored where it is), with the last estimate's
+        covariance."""
+        rate, correction, cov = self.config.save_pose_rate, self._map_to_odom, self._covariance
+        if rate <= 0.0 or correction is None or cov is None or abs(now - self._pose_saved_at) < 1.0 / rate:
+            return  # abs: sim time may have gone back
+        self._pose_saved_at = now
+        pose = correction.compose(odom)
+        self._pose_to_store = {
+            "initial_pose_x": pose.x, "initial_pose_y": pose.y, "initial_pose_a": pose.yaw,
+            "initial_cov_xx": cov[0, 0], "initial_cov_yy": cov[1, 1], "initial_cov_aa": cov[2, 2],
+        }  # fmt: skip
+        self._store_wanted.set()
+
+    def _store_poses(self) -> None:
+        """Write the latest pose to store onto the parameter server whenever there is one (the latest wins)."""
+        while not rospy.is_shutdown():
+            if not self._store_wanted.wait(1.0):
+                continue
+            self._store_wanted.clear()
+            try:
+                for name, value in self._pose_to_store.items():
+                    rospy.set_param(f"~{name}", float(value))
+            except (OSError, rospy.ROSException) as err:  # the master is away for a moment: the next save retries
+                rospy.logwarn_throttle(5.0, f"localisation: cannot store the pose on the parameter server: {err}")
 
     def _publish_transform(self, _event: Any) -> None:
         correction = self._map_to_odom

@@ -57,15 +57,9 @@ def private_params(node: str) -> dict[str, Any]:
     and mappings as given), the default where unset."""
     values: dict[str, Any] = {}
     for name, default in node_defaults(node).items():
-        # one branch per type, so that each call's type variable is one type (mypy strict)
-        if isinstance(default, bool):
-            values[name] = private_param(name, default)
-        elif isinstance(default, int):
-            values[name] = private_param(name, default)
-        elif isinstance(default, float):
-            values[name] = private_param(name, default)
-        elif isinstance(default, str):
-            values[name] = private_param(name, default)
+        if isinstance(default, bool | int | float | str):
+            # read as the default's own type at run time; mypy's constrained type variable takes one type a call
+            values[name] = private_param(name, default)  # type: ignore[type-var]
         else:
             values[name] = rospy.get_param(f"~{name}", default)
     return values

@@ -6,8 +6,10 @@ Encoding schema and the md5 + receive time in the attachment (:mod:`mrs_nav.brid
 (the map) go through an advanced publisher whose cache answers late joiners. Inbound, only allow-listed
 topics are listened to, and :class:`mrs_nav.bridge.inbound.InboundValidator` checks each message first.
 
-Inbound, a payload's size is checked before it is copied out of Zenoh, then its content, then the topic's rate
-limit; every refusal is counted and logged at most once per ``DROP_LOG_PERIOD`` per topic.
+Inbound, a payload's size is checked before it is copied out of Zenoh, then its content (with its header stamp's
+age on the wall clock), then the topic's rate limit; every refusal is counted and logged at most once per
+``DROP_LOG_PERIOD`` per topic. A listen endpoint a network reaches without TLS and client authentication stops
+the node at start unless ``insecure`` is set, and is then warned at every start.
 
 Liveness follows the ROS graph: a topic whose last ROS publisher is gone loses its liveliness token and its
 late-joiner cache, and when the master no longer lists the bridge's subscriptions or publications (it was
@@ -48,7 +50,7 @@ from mrs_nav.bridge.keys import (
     types_key,
 )
 from mrs_nav.bridge.rate_limit import RateLimiter
-from mrs_nav.bridge.session import open_session, refuse_lowlatency, zenoh_config
+from mrs_nav.bridge.session import bridge_settings, open_session, refuse_lowlatency, zenoh_config
 from mrs_nav.bridge.wire import (
     attachment_prefix,
     encode_definition,
@@ -132,7 +134,9 @@ class ZenohBridgeNode:
         self.prefix = config.key_prefix
         self.services = services_pattern(self.prefix)
         self.validator = InboundValidator(config)
-        self.settings = config.zenoh_settings({t: self.validator.md5(t) for t in self.validator.allowed_topics()})
+        self.settings, self._insecure = bridge_settings(
+            config, {t: self.validator.md5(t) for t in self.validator.allowed_topics()}
+        )
         self._lock = threading.RLock()
         self._session: zenoh.Session | None = None
         self._outbound: dict[str, _Outbound] = {}
@@ -149,6 +153,8 @@ class ZenohBridgeNode:
     def start(self) -> None:
         # Raise now if the configuration cannot work.
         refuse_lowlatency(zenoh_config(self.settings, self.config.zenoh_config), self.config.zenoh_config)
+        for warning in self._insecure:  # every start: an open robot must not be forgotten
+            rospy.logwarn("zenoh bridge: %s", warning)
         for rule in self.config.inbound:
             msg_class = get_message_class(rule.type)
             if msg_class is None:
@@ -426,9 +432,15 @@ class ZenohBridgeNode:
             return self._refuse(inbound, f"{size} bytes exceed the {inbound.rule.max_bytes}-byte limit of {topic}")
         data = payload.to_bytes() if payload is not None else b""
         try:
-            self.validator.validate(topic, schema, data, attachment.to_bytes() if attachment is not None else None)
+            self.validator.validate(
+                topic, schema, data, attachment.to_bytes() if attachment is not None else None, now=time.time()
+            )
             msg = inbound.msg_class()
             msg.deserialize(data)
+            if hasattr(msg, "header"):
+                # The stamp was the sender's wall clock, checked for age above; in ROS it is ROS time (sim time
+                # in a simulation), as rviz stamps its goals, so that a recording places the goal where it came.
+                msg.header.stamp = rospy.Time.now()
         except Exception as err:  # anything the network sends may be broken: never let it stop the node
             return self._refuse(inbound, str(err))
         # The rate counts valid messages only, so that a stream of junk cannot crowd out a real goal.

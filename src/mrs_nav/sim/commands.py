@@ -3,8 +3,9 @@
 A command (v, omega) is clamped to the speed limits when it arrives. Each control step moves the current
 command towards it by at most ``a_max * dt`` (a trapezoidal profile), so a step from rest to ``v`` takes
 ``v / a_max`` seconds and covers ``v^2 / (2 a_max)`` metres; stopping gives the same back, so a command held
-for T seconds travels ``v T`` in total. If no command arrives for ``timeout`` seconds of sim time the target
-becomes zero, as the Burger's firmware does when its driver node dies.
+for T seconds travels ``v T`` in total. If no command arrives for ``command_timeout`` seconds of sim time the
+target becomes zero and the robot brakes at the (harder) watchdog rates, as the Burger's firmware stops its
+wheels when its driver node dies.
 """
 
 from __future__ import annotations
@@ -65,10 +66,13 @@ class CommandLimiter:
 
     def update(self, now: float, dt: float) -> Twist2D:
         """The command to apply for the step of ``dt`` seconds starting at ``now``."""
-        target = Twist2D() if self.timed_out(now) else self._target
         p = self._params
+        if self.timed_out(now):
+            target, linear, angular = Twist2D(), p.watchdog_linear_decel, p.watchdog_angular_decel
+        else:
+            target, linear, angular = self._target, p.max_linear_accel, p.max_angular_accel
         self._current = Twist2D(
-            _approach(self._current.v, target.v, p.max_linear_accel * dt),
-            _approach(self._current.omega, target.omega, p.max_angular_accel * dt),
+            _approach(self._current.v, target.v, linear * dt),
+            _approach(self._current.omega, target.omega, angular * dt),
         )
         return self._current

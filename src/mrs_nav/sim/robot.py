@@ -50,7 +50,13 @@ class BurgerParams:
     wheel_friction: float = 1.0
     caster_friction: float = 0.0
     body_friction: float = 0.3
-    command_timeout: float = 0.5
+    # The cmd_vel watchdog: after command_timeout s of sim time without a command (three periods of the 10 Hz
+    # navigation nodes, so one late or lost command never trips it) the robot brakes at the watchdog rates, harder
+    # than the drive's ramp (the Burger's firmware zeroes its wheel velocities), so that it stands still within
+    # 0.5 s of its command source dying: 0.3 s + 0.22 m/s / 2.5 m/s^2 (0.09 s) or 2.84 rad/s / 25 rad/s^2 (0.11 s).
+    command_timeout: float = 0.3
+    watchdog_linear_decel: float = 2.5
+    watchdog_angular_decel: float = 25.0
 
     def __post_init__(self) -> None:
         for field in fields(self):

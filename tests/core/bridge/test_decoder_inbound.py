@@ -87,6 +87,42 @@ def test_bad_inbound_messages_are_refused_with_the_reason(
         validator.validate(topic, schema, payload)
 
 
+NOW = 1_800_000_000.0  # s since the epoch, the bridge's clock in the tests below
+S = 1_000_000_000  # ns
+
+
+@pytest.mark.parametrize(
+    ("stamp_ns", "max_age", "match"),
+    [
+        (int(NOW - 3600) * S, None, r"stamped 3600.0 s ago, older than its max_age 5 s"),  # captured an hour ago
+        (0, None, "older than its max_age"),  # never stamped
+        (int((NOW - 5.5) * S), None, "older than"),
+        (int(NOW - 30) * S, 20.0, "older than its max_age 20 s"),
+        (int(NOW + 2) * S, None, r"stamped 2.0 s in the future, beyond the 0.5 s clock tolerance"),
+        (int((NOW - 4.5) * S), None, ""),
+        (int((NOW + 0.4) * S), None, ""),
+        (int(NOW - 10) * S, 20.0, ""),
+    ],
+)
+def test_an_inbound_goal_too_old_or_from_the_future_is_refused(
+    stamp_ns: int, max_age: float | None, match: str
+) -> None:
+    rule: dict[str, Any] = {"topic": GOAL} if max_age is None else {"topic": GOAL, "max_age": max_age}
+    validator = InboundValidator(BridgeConfig.from_mapping({"inbound": [rule]}))
+    payload = serialize_goal(1.0, 2.0, 0.0, stamp_ns=stamp_ns)
+    if not match:
+        assert validator.validate(GOAL, POSE_STAMPED, payload, now=NOW).pose.position.x == 1.0
+        return
+    with pytest.raises(InvalidInputError, match=match):
+        validator.validate(GOAL, POSE_STAMPED, payload, now=NOW)
+
+
+@pytest.mark.parametrize("max_age", [0, -1.0, float("nan"), float("inf")])
+def test_a_max_age_that_is_not_a_positive_time_is_refused(max_age: float) -> None:
+    with pytest.raises(InvalidInputError, match=r"inbound /move_base_simple/goal max_age .*expected an age > 0 s"):
+        BridgeConfig.from_mapping({"inbound": [{"topic": GOAL, "max_age": max_age}]})
+
+
 def test_a_wrong_md5_is_refused(validator: InboundValidator) -> None:
     with pytest.raises(InvalidInputError, match="md5"):
         validator.validate(GOAL, POSE_STAMPED, serialize_goal(0, 0, 0), encode_attachment("1" * 32, 0))

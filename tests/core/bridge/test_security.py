@@ -22,7 +22,13 @@ from mrs_nav.bridge.config import BridgeConfig, zenoh_settings
 from mrs_nav.bridge.decoder import noetic_store
 from mrs_nav.bridge.keys import publish_key, status_key, topic_key
 from mrs_nav.bridge.monitor import RemoteMonitor, serialize_goal
-from mrs_nav.bridge.session import open_client_session, open_session, refuse_lowlatency, zenoh_config
+from mrs_nav.bridge.session import (
+    bridge_settings,
+    open_client_session,
+    open_session,
+    refuse_lowlatency,
+    zenoh_config,
+)
 from mrs_nav.bridge.wire import encode_attachment, encode_status, encoding_text
 from mrs_nav.errors import InvalidInputError
 from tests.core.bridge.test_monitor import answer_types, grid, odometry
@@ -37,9 +43,10 @@ GOAL_MD5 = STORE.generate_msgdef("geometry_msgs/msg/PoseStamped", ros_version=1)
 class Pki:
     ca: KeyPair
     server: KeyPair
-    monitor: KeyPair
+    monitor: KeyPair  # a viewer's certificate
     intruder: KeyPair  # signed by another CA
     users: Path
+    operator: KeyPair | None = None
 
 
 def client_file(
@@ -68,7 +75,7 @@ def pki(tmp_path_factory: pytest.TempPathFactory) -> Pki:
     users.write_text("operator:op-secret\nviewer:view-secret\n")
     rogue = make_ca(d, "rogue-ca")
     return Pki(ca, make_cert(ca, d, "bridge", ("127.0.0.1", "localhost")), make_cert(ca, d, "monitor"),
-               make_cert(rogue, d, "intruder"), users)  # fmt: skip
+               make_cert(rogue, d, "intruder"), users, make_cert(ca, d, "operator"))  # fmt: skip
 
 
 class RobotRouter:
@@ -90,7 +97,7 @@ class RobotRouter:
             {"mode": "router", "listen": [self.endpoint], "zenoh_config": str(server), "operators": ["operator"],
              "inbound": [GOAL]}
         )  # fmt: skip
-        self.session = open_session(config.zenoh_settings({GOAL: GOAL_MD5}), config.zenoh_config)
+        self.session = open_session(bridge_settings(config, {GOAL: GOAL_MD5})[0], config.zenoh_config)
         self.inbound: list[bytes] = []
         s = self.session
         self.entities: list[Any] = [
@@ -164,7 +171,9 @@ def test_only_the_bridge_publishes_data_keys_and_only_operators_send_goals(
 ) -> None:
     watcher = open_client_session([robot.endpoint], "client", client_file(tmp_path, pki, "viewer", "view-secret"))
     forger = open_client_session([robot.endpoint], "client", client_file(tmp_path, pki, "viewer", "view-secret"))
-    operator = open_client_session([robot.endpoint], "client", client_file(tmp_path, pki, "operator", "op-secret"))
+    operator = open_client_session(
+        [robot.endpoint], "client", client_file(tmp_path, pki, "operator", "op-secret", pair=pki.operator)
+    )
     try:
         seen: list[tuple[str, bytes]] = []
         tokens: list[str] = []
@@ -176,8 +185,10 @@ def test_only_the_bridge_publishes_data_keys_and_only_operators_send_goals(
             forger.put("mrs_nav/odom", b"forged")
         forger.put(topic_key("mrs_nav", GOAL), serialize_goal(9, 9, 0))  # a viewer may not send goals
         refused = list(forger.get(publish_key("mrs_nav", GOAL), payload=serialize_goal(8, 8, 0), timeout=1.0))
-        operator.put(topic_key("mrs_nav", GOAL), serialize_goal(1, 2, 0))
-        accepted = list(operator.get(publish_key("mrs_nav", GOAL), payload=serialize_goal(3, 4, 0), timeout=2.0))
+        operator.put(topic_key("mrs_nav", GOAL), serialize_goal(1, 2, 0, stamp_ns=1))
+        accepted = list(
+            operator.get(publish_key("mrs_nav", GOAL), payload=serialize_goal(3, 4, 0, stamp_ns=1), timeout=2.0)
+        )
         robot.put(robot.odom, odometry(2.0, 0.0), "nav_msgs/msg/Odometry")
         wait_for(lambda: any(k == "mrs_nav/odom" for k, _ in seen), 10, "the bridge's own odometry")
         wait_for(lambda: len(robot.inbound) == 2, 10, "the operator's two goals")
@@ -190,8 +201,95 @@ def test_only_the_bridge_publishes_data_keys_and_only_operators_send_goals(
     assert "mrs_nav/forged" not in tokens
     assert not any(r.ok is not None for r in refused)
     assert [r.ok is not None for r in accepted] == [True]
-    assert sorted(robot.inbound) == sorted([serialize_goal(1, 2, 0), serialize_goal(3, 4, 0)])  # put and query race
+    expected = [serialize_goal(1, 2, 0, stamp_ns=1), serialize_goal(3, 4, 0, stamp_ns=1)]
+    assert sorted(robot.inbound) == sorted(expected)  # put and query race
     assert [k for k, _ in seen if k == topic_key("mrs_nav", GOAL)] == [topic_key("mrs_nav", GOAL)]  # operator's
+
+
+@pytest.mark.parametrize(
+    ("credentials", "operator"),
+    [
+        (("viewer", "operator", "op-secret"), False),  # a viewer's certificate with the operator's password
+        (("operator", "viewer", "view-secret"), False),  # the operator's certificate with a viewer's password
+        (("operator", "operator", "op-secret"), True),
+    ],
+)
+def test_the_operator_role_needs_both_the_certificate_and_the_password(
+    robot: RobotRouter, pki: Pki, tmp_path: Path, credentials: tuple[str, str, str], operator: bool
+) -> None:
+    certificate, user, password = credentials
+    pair = pki.operator if certificate == "operator" else pki.monitor
+    session = open_client_session([robot.endpoint], "client", client_file(tmp_path, pki, user, password, pair=pair))
+    try:
+        time.sleep(0.5)  # the session's declarations reach the router
+        replies = list(session.get(publish_key("mrs_nav", GOAL), payload=serialize_goal(1, 1, 0), timeout=2.0))
+    finally:
+        session.close()  # type: ignore[no-untyped-call]
+    assert [r.ok is not None for r in replies] == ([True] if operator else [])
+
+
+def test_operators_without_a_credential_to_check_are_refused() -> None:
+    config = BridgeConfig.from_mapping({"operators": ["operator"], "inbound": [GOAL]})
+    with pytest.raises(InvalidInputError, match=r"operators \['operator'\]: the Zenoh configuration checks no cred"):
+        bridge_settings(config, {GOAL: GOAL_MD5})
+
+
+def tls_file(tmp: Path, pki: Pki, *, mtls: bool = False, passwords: bool = False) -> str:
+    """A robot's Zenoh file with a server certificate, client certificates and/or passwords."""
+    path = tmp / f"robot-{mtls}-{passwords}.json5"
+    tls = {"listen_certificate": str(pki.server.cert), "listen_private_key": str(pki.server.key)}
+    if mtls:
+        tls |= {"root_ca_certificate": str(pki.ca.cert), "enable_mtls": True}
+    auth = {"usrpwd": {"dictionary_file": str(pki.users)}} if passwords else {}
+    path.write_text(json.dumps({"transport": {"link": {"tls": tls}, "auth": auth}}))
+    return str(path)
+
+
+@pytest.mark.parametrize(
+    ("endpoint", "security", "why"),
+    [
+        ("tcp/0.0.0.0:7447", "", "without encryption or client authentication"),
+        ("tcp/[::]:7447", "", "without encryption"),
+        ("ws/0.0.0.0:7448", "", "without encryption"),
+        ("udp/0.0.0.0:7447", "", "without encryption"),
+        ("tcp/robot.example:7447", "", "without encryption"),
+        ("tcp/[::ffff:192.168.1.20]:7447", "", "without encryption"),
+        ("tls/0.0.0.0:7447", "tls", "TLS without client authentication"),
+    ],
+)
+def test_a_listen_endpoint_open_to_the_network_is_refused_unless_insecure(
+    pki: Pki, tmp_path: Path, endpoint: str, security: str, why: str
+) -> None:
+    params: dict[str, Any] = {"listen": [endpoint], "inbound": [GOAL]}
+    if security:
+        params["zenoh_config"] = tls_file(tmp_path, pki)
+    with pytest.raises(InvalidInputError, match=rf"listen endpoint {re.escape(endpoint)} .*{why}.*insecure: true"):
+        bridge_settings(BridgeConfig.from_mapping(params), {GOAL: GOAL_MD5})
+    _, warnings = bridge_settings(BridgeConfig.from_mapping({**params, "insecure": True}), {GOAL: GOAL_MD5})
+    assert len(warnings) == 1
+    assert warnings[0].startswith(f"INSECURE (insecure: true): {endpoint} ")
+
+
+@pytest.mark.parametrize(
+    ("endpoint", "security"),
+    [
+        ("tcp/127.0.0.1:7447", ""),
+        ("tcp/[::1]:7447", ""),
+        ("tcp/[::ffff:127.0.0.1]:7447", ""),
+        ("tcp/127.0.0.2:7447", ""),
+        ("ws/localhost:7448", ""),
+        ("unixsock-stream/tmp/robot.sock", ""),
+        ("tls/0.0.0.0:7447", "mtls"),
+        ("tls/0.0.0.0:7447", "passwords"),
+    ],
+)
+def test_loopback_and_authenticated_tls_endpoints_are_accepted_without_warning(
+    pki: Pki, tmp_path: Path, endpoint: str, security: str
+) -> None:
+    params: dict[str, Any] = {"listen": [endpoint]}
+    if security:
+        params["zenoh_config"] = tls_file(tmp_path, pki, mtls=security == "mtls", passwords=security == "passwords")
+    assert bridge_settings(BridgeConfig.from_mapping(params), {})[1] == []
 
 
 def test_a_tls_endpoint_without_certificates_is_one_clear_error(tmp_path: Path) -> None:

@@ -55,6 +55,19 @@ def test_a_bad_endpoint_is_one_error_line(endpoint: str, capsys: pytest.CaptureF
     assert ".rs:" not in err
 
 
+@pytest.mark.parametrize("endpoint", ["tcp/0.0.0.0:7447", "tcp/[::]:7447", "ws/0.0.0.0:7448", "udp/0.0.0.0:7447"])
+def test_an_endpoint_open_to_the_network_is_refused_without_insecure(
+    endpoint: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Refused before any socket is opened (with --insecure it would listen there: not run here, loopback only)."""
+    assert main(["router", "--listen", endpoint]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"ERROR: listen endpoint {endpoint} is reachable from the network without encryption")
+    assert err.endswith("or give --insecure to accept that anyone who reaches it may watch the robot and send what "
+                        "its inbound allow-list accepts")  # fmt: skip
+    assert "\n" not in err
+
+
 @pytest.mark.parametrize(
     ("content", "match"),
     [("{ mode: 5 }", "line 1, column 9: invalid type: integer `5`"), (b"\xff", "cannot read zenoh_config: not UTF-8")],
