@@ -256,15 +256,22 @@ def test_a_goal_stamped_an_hour_ago_or_in_the_future_is_dropped_and_counted(rout
             for s in (hour_ago, ahead)
         ]
         wait_for(lambda: status(session)["inbound"][GOAL]["dropped"] == dropped_before + 4, 10, "4 goals counted")
-        time.sleep(1.0 / 2.0)  # goals are limited to 2 Hz: one period since the last test's
         sent_at = rospy_node.get_rostime()
-        pub.put(serialize_goal(0.75, 0.5, 0.0))  # stamped now: taken
-        wait_for(lambda: len(goals) >= 1, 10, "the fresh goal")
+
+        def fresh_goal_taken() -> bool:
+            # Goals are limited to 2 Hz and a loaded machine may deliver the last test's late: a fresh goal that
+            # the limit drops is sent again, never a stale one.
+            if not goals:
+                pub.put(serialize_goal(0.75, 0.5, 0.0))  # stamped now: taken
+                time.sleep(0.6)
+            return bool(goals)
+
+        wait_for(fresh_goal_taken, 10, "the fresh goal")
         time.sleep(0.5)  # absence of the stale ones: anything in flight arrives
     finally:
         session.close()
         sub.unregister()
-    assert [(g.pose.position.x, g.pose.position.y) for g in goals] == [(0.75, 0.5)]
+    assert {(g.pose.position.x, g.pose.position.y) for g in goals} == {(0.75, 0.5)}
     assert goals[0].header.stamp >= sent_at  # restamped with the robot's ROS time
     errors = [r.err.payload.to_string() for replies in answers for r in replies if r.err is not None]
     assert len(errors) == 2
