@@ -9,7 +9,11 @@ heading) on the ``move_base`` action (move_base_msgs/MoveBaseAction: goal, cance
 feedback ``base_position`` every control period, result; status SUCCEEDED, ABORTED or REJECTED with a text
 reason, PREEMPTED) or on ``move_base_simple/goal`` (geometry_msgs/PoseStamped), which is re-sent as an action
 goal (as move_base does) so both take the same path. Service ``make_plan`` (nav_msgs/GetPlan) plans without
-moving (an empty path when it finds none).
+moving (an empty path when it finds none); service ``move_base/clear_costmaps`` (std_srvs/Empty) drops every
+obstacle the laser marked, as move_base's. ``amcl_pose`` and ``initialpose`` (geometry_msgs/
+PoseWithCovarianceStamped) decide when scans may mark obstacles (:mod:`mrs_nav.navigation.marking`: only while the
+localisation is confident; a 2D Pose Estimate drops the marks placed so far). Before a goal is aborted the
+recoveries of :mod:`mrs_nav.navigation.recovery` are tried (move_base's parameter names).
 
 Outputs: ``cmd_vel`` (geometry_msgs/Twist) while a goal is active (and a zero Twist when it ends); with
 ``~heartbeat`` also a zero Twist every control period while idle, which is what paces a simulator in lockstep;
@@ -39,7 +43,7 @@ import actionlib
 import numpy as np
 import rospy
 import tf2_ros
-from geometry_msgs.msg import PoseStamped, Twist
+from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Twist
 from move_base_msgs.msg import MoveBaseAction, MoveBaseActionGoal, MoveBaseFeedback, MoveBaseResult
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Path
@@ -47,12 +51,14 @@ from nav_msgs.srv import GetPlan, GetPlanRequest, GetPlanResponse
 from rospy.numpy_msg import numpy_msg
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
+from std_srvs.srv import Empty, EmptyRequest, EmptyResponse
 
 from mrs_nav.control.goal_approach import XY_GOAL_TOLERANCE, YAW_GOAL_TOLERANCE, ApproachConfig
 from mrs_nav.control.path_following import FollowerConfig
 from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
+from mrs_nav.navigation.marking import MarkingConfig, MarkingGate
 from mrs_nav.navigation.navigator import (
     PLANNERS,
     EventKind,
@@ -65,9 +71,12 @@ from mrs_nav.navigation.navigator import (
     PlanRequest,
     rrt_planner,
 )
+from mrs_nav.navigation.obstacles import OBSTACLE_RANGE_M, RAYTRACE_RANGE_M
 from mrs_nav.navigation.plan_worker import run_plan
+from mrs_nav.navigation.recovery import RecoveryBehavior, RecoveryConfig
 from mrs_nav.robot import BURGER_MAX_ANGULAR, BURGER_MAX_LINEAR, BURGER_RADIUS
 from mrs_nav.ros.conversions import pose_msg
+from mrs_nav.ros.localisation_node import covariance_3x3
 from mrs_nav.ros.navigation_conversions import (
     goal_heading,
     grid_from_msg,
@@ -87,6 +96,7 @@ STATUS_OF_EVENT = {
     EventKind.PLAN_FAILED: "active",
     EventKind.HOLDING: "active",
     EventKind.RESUMED: "active",
+    EventKind.RECOVERY: "active",
     EventKind.PREEMPTED: "preempted",
     EventKind.CANCELLED: "preempted",
     EventKind.REFUSED: "refused",
@@ -116,6 +126,7 @@ class RrtNavigationConfig:
     seed: int | None = None
     heartbeat: bool = False
     navigator: NavigatorConfig = field(default_factory=NavigatorConfig)
+    marking: MarkingConfig = field(default_factory=MarkingConfig)
 
     def __post_init__(self) -> None:
         if self.planner not in PLANNERS:
@@ -165,8 +176,21 @@ class RrtNavigationConfig:
             retry_delay_s=private_param("retry_delay", 1.0),
             progress_timeout_s=private_param("progress_timeout", 30.0),
             map_timeout_s=private_param("map_timeout", 0.0),
+            obstacle_range_m=private_param("obstacle_range", OBSTACLE_RANGE_M),
+            raytrace_range_m=private_param("raytrace_range", RAYTRACE_RANGE_M),
             follower=follower,
             approach=approach,
+            recovery=RecoveryConfig.from_move_base(
+                recovery_behavior_enabled=private_param("recovery_behavior_enabled", True),
+                clearing_rotation_allowed=private_param("clearing_rotation_allowed", True),
+                recovery_behaviors=recovery_behaviors(),
+                conservative_reset_dist=private_param("conservative_reset_dist", 3.0),
+                rotation_speed=max_angular,
+            ),
+        )
+        marking = MarkingConfig(
+            max_xy_stddev_m=private_param("marking_xy_stddev", 0.2),
+            max_yaw_stddev_rad=private_param("marking_yaw_stddev", 0.2),
         )
         seed = private_param("seed", -1)
         max_iterations = private_param("max_iterations", 0)
@@ -186,7 +210,20 @@ class RrtNavigationConfig:
             seed=None if seed < 0 else seed,
             heartbeat=private_param("heartbeat", False),
             navigator=navigator,
+            marking=marking,
         )
+
+
+def recovery_behaviors() -> list[str]:
+    """``~recovery_behaviors``: the names of the recoveries in order, as strings or as move_base's
+    ``{name: ..., type: ...}`` entries (the name is what counts)."""
+    value = rospy.get_param("~recovery_behaviors", [b.value for b in RecoveryBehavior])
+    if not isinstance(value, list):
+        raise InvalidInputError(f"~recovery_behaviors: expected a list, got {value!r}")
+    names = [entry.get("name") if isinstance(entry, dict) else entry for entry in value]
+    if not all(isinstance(name, str) for name in names):
+        raise InvalidInputError(f"~recovery_behaviors: expected names, got {value!r}")
+    return names
 
 
 class RrtNavigationNode:
@@ -196,6 +233,7 @@ class RrtNavigationNode:
         self.config = config
         self._planner = rrt_planner(config.planner, config.time_budget_s, config.max_iterations)
         self.navigator = Navigator(self._planner, config.navigator, seed=config.seed)
+        self._marking = MarkingGate(config.marking)
         self._query_rng = np.random.default_rng(None if config.seed is None else config.seed + 1)
         self._lock = threading.Lock()
         self._tf_buffer = tf2_ros.Buffer()
@@ -231,8 +269,11 @@ class RrtNavigationNode:
             rospy.Subscriber("map", numpy_msg(OccupancyGridMsg), self._on_map, queue_size=1),
             rospy.Subscriber("scan", LaserScan, self._on_scan, queue_size=1),
             rospy.Subscriber("move_base_simple/goal", PoseStamped, self._on_simple_goal, queue_size=1),
+            rospy.Subscriber("amcl_pose", PoseWithCovarianceStamped, self._on_localisation, queue_size=10),
+            rospy.Subscriber("initialpose", PoseWithCovarianceStamped, self._on_initial_pose, queue_size=1),
         ]
         self._plan_service = rospy.Service("make_plan", GetPlan, self._on_make_plan)
+        self._clear_service = rospy.Service("move_base/clear_costmaps", Empty, self._on_clear_costmaps)
         # The planner thread holds the GIL for long stretches; the default 5 ms switch interval would delay each
         # /clock, /tf and timer hand-off of the control loop by up to that, which is what paces a lockstep sim.
         sys.setswitchinterval(0.0005)
@@ -267,8 +308,33 @@ class RrtNavigationNode:
             rospy.logwarn_throttle(5.0, f"rrt_navigation: dropping scan, no transform to the map: {err}")
             return
         with self._lock:
-            self.navigator.set_scan(origin, ends, hit)
+            self.navigator.set_scan(origin, ends, hit, self._marking.may_mark(msg.header.stamp.to_sec()))
             self._last_scan = rospy.get_time()
+
+    def _on_localisation(self, msg: PoseWithCovarianceStamped) -> None:
+        try:
+            covariance = covariance_3x3(msg)
+        except MrsNavError as err:
+            rospy.logwarn_throttle(5.0, f"rrt_navigation: ignoring amcl_pose: {err}")
+            return
+        with self._lock:
+            self._marking.report(msg.header.stamp.to_sec(), covariance)
+
+    def _on_initial_pose(self, _msg: PoseWithCovarianceStamped) -> None:
+        """A 2D Pose Estimate: the pose that placed the marks so far was wrong (module docstring)."""
+        with self._lock:
+            self._marking.reset(rospy.get_time())
+            cleared = self.navigator.clear_marks()
+        rospy.loginfo(
+            f"rrt_navigation: new initial pose: dropped {cleared} marked cells; marking resumes once the"
+            " localisation is confident"
+        )
+
+    def _on_clear_costmaps(self, _req: EmptyRequest) -> EmptyResponse:
+        with self._lock:
+            cleared = self.navigator.clear_marks()
+        rospy.loginfo(f"rrt_navigation: clear_costmaps: dropped {cleared} marked cells")
+        return EmptyResponse()
 
     def _on_simple_goal(self, msg: PoseStamped) -> None:
         """Re-send an rviz goal as an action goal, as move_base does, so that it takes the action's path."""
