@@ -152,7 +152,7 @@ def beam_cells(
         pieces.append((lines - start[axis]) / np.where(span == 0.0, 1.0, span))
         beams.append(beam)
     t, beam = np.concatenate(pieces), np.concatenate(beams)
-    order = np.lexsort((t, beam))
+    order = np.argsort(beam * 2.0 + t)  # by beam, then along it (t lies in [0, 1])
     t, beam = t[order], beam[order]
     same = beam[1:] == beam[:-1]
     middle = (t[1:] + t[:-1])[same] / 2.0
