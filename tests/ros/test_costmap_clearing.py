@@ -6,7 +6,8 @@ marks the laser no longer sees.
 The localisation is first told, confidently, a pose 1 m and 30 deg off the robot's true one (a 2D Pose Estimate
 given in the wrong place): 30 scans are placed from there and mark diagonal walls across the corridor. Then the
 right pose comes, with rviz's covariance: within 10 s of sim time the costmap holds no mark in the free space
-of the map, and a goal along the corridor behind the phantom walls is reached."""
+of the map, and a goal along the corridor behind the phantom walls is reached. A goal reached while the
+localisation is unsure is not reported as a success."""
 
 from __future__ import annotations
 
@@ -84,6 +85,7 @@ def office(
     import actionlib
     from geometry_msgs.msg import PoseWithCovarianceStamped
     from move_base_msgs.msg import MoveBaseAction
+    from rosgraph_msgs.msg import Log
 
     rospy = rospy_node
     grid = rasterize_world(load_world(REPO / "worlds" / "office.world"), 0.05, 0.5)
@@ -93,6 +95,10 @@ def office(
     amcl = rospy.Subscriber("/amcl_pose", PoseWithCovarianceStamped, estimates.append, queue_size=10)
     poses = rospy.Publisher("/initialpose", PoseWithCovarianceStamped, queue_size=1)
     costmaps = Costmaps(rospy)
+    said: list[str] = []  # the navigation node's log lines: why a mark is there or not
+    rosout = rospy.Subscriber(
+        "/rosout", Log, lambda m: said.append(m.msg) if m.name == "/rrt_navigation" else None, queue_size=100
+    )
     truth = TruthTrack(rospy, "office.world")
     with ros_master.launch("navigation.launch", *MAX_RATE, *args) as proc:
         client = actionlib.SimpleActionClient("move_base", MoveBaseAction)
@@ -109,11 +115,13 @@ def office(
                 "truth": truth,
                 "grid": grid,
                 "env": ros_master.env,
+                "said": said,
             }
             assert proc.poll() is None, "a required node died"
         finally:
             close_action_client(client)
             amcl.unregister()
+            rosout.unregister()
             poses.unregister()
             costmaps.close()
             truth.close()
@@ -188,7 +196,7 @@ def test_clear_costmaps_through_rosservice_clears_marks_out_of_sight(office: dic
         wait_for(lambda: add.get_num_connections() > 0, 20.0, "the simulator's add_box")
         add.publish(box)
         wait_costmap_after(office, rospy.get_time() + 2.0)
-        assert phantoms(office) > 0, "the box was not marked"
+        assert phantoms(office) > 0, ("the box was not marked", office["said"][-5:])
         client.send_goal(target(rospy, -4.0, -5.0, 0.0))
         wait_for(lambda: client.get_state() not in (0, 1), 150.0, "the goal to end")
         assert client.get_state() == GoalStatus.SUCCEEDED, client.get_goal_status_text()
@@ -207,3 +215,19 @@ def test_clear_costmaps_through_rosservice_clears_marks_out_of_sight(office: dic
         assert phantoms(office) == 0
     finally:
         add.unregister()
+
+
+def test_a_goal_reached_while_the_localisation_is_unsure_is_aborted_not_succeeded(office: dict[str, Any]) -> None:
+    """A 2D Pose Estimate at the truth but wide (1 m, 0.5 rad): the robot then drives 0.15 m to a goal, less than
+    the localisation's update distance, so the localisation is still unsure there: ABORTED with the reason."""
+    from actionlib_msgs.msg import GoalStatus
+
+    rospy, client, truth = office["rospy"], office["client"], office["truth"]
+    _, x, y = truth.last()
+    yaw = truth.last_yaw()
+    tell_pose(office, Pose2D(x, y, yaw), (1.0, 1.0, 0.25))
+    client.send_goal(target(rospy, x + 0.15 * math.cos(yaw), y + 0.15 * math.sin(yaw), yaw))
+    wait_for(lambda: client.get_state() not in (0, 1), 150.0, "the goal to end")
+    assert client.get_state() == GoalStatus.ABORTED, client.get_goal_status_text()
+    assert "reached by the estimate" in client.get_goal_status_text()
+    assert "the localisation" in client.get_goal_status_text()

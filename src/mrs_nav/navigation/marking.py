@@ -1,4 +1,5 @@
-"""When laser scans may mark obstacles: only while the localisation is confident of the pose that places them.
+"""How far the localisation is trusted: laser scans mark obstacles only while it is confident of the pose that
+places them, and a goal counts as reached only when it is confident of the pose that reached it.
 
 A scan placed at a wrong pose marks the walls it sees where they are not: diagonal walls across rooms and
 corridors, many of them in cells no later beam crosses (behind a wall as seen from where the robot truly is), so
@@ -17,7 +18,9 @@ Estimate):
   (the localisation's first reports after a 2D Pose Estimate carry its covariance, wide for rviz's).
 
 Clearing is never held back: a beam placed at a wrong pose can only unmark a cell, which the next confident
-scan marks again if the obstacle is there. Times are in seconds of the caller's clock (sim time in ROS).
+scan marks again if the obstacle is there. The same test, applied to the latest report (:meth:`MarkingGate.doubt`),
+keeps a goal from being reported reached on a pose the localisation is not sure of. Times are in seconds of the
+caller's clock (sim time in ROS).
 """
 
 from __future__ import annotations
@@ -55,24 +58,41 @@ class MarkingGate:
         self._reported = False
         self._confident_since: float | None = None  # stamp of the first confident report of this spell
         self._reset_at = -math.inf
+        self._doubt: str | None = None  # why the latest report is not confident
 
     def confident(self, covariance: npt.ArrayLike) -> bool:
         """Whether a pose with ``covariance`` (``(3, 3)``: x, y in m, yaw in rad) is confident enough to mark."""
+        return self._why_unsure(covariance) is None
+
+    def _why_unsure(self, covariance: npt.ArrayLike) -> str | None:
         cov = np.asarray(covariance, dtype=np.float64).reshape(3, 3)
         if not np.all(np.isfinite(cov)):
-            return False
-        xy = float(np.linalg.eigvalsh((cov[:2, :2] + cov[:2, :2].T) / 2.0)[-1])
+            return "the localisation's covariance is not finite"
+        xy = math.sqrt(max(float(np.linalg.eigvalsh((cov[:2, :2] + cov[:2, :2].T) / 2.0)[-1]), 0.0))
+        yaw = math.sqrt(max(float(cov[2, 2]), 0.0))
         cfg = self.config
-        return math.sqrt(max(xy, 0.0)) <= cfg.max_xy_stddev_m and math.sqrt(max(cov[2, 2], 0.0)) <= (
-            cfg.max_yaw_stddev_rad
+        if xy <= cfg.max_xy_stddev_m and yaw <= cfg.max_yaw_stddev_rad:
+            return None
+        return (
+            f"the localisation is not confident (1 sigma {xy:.2f} m, {yaw:.2f} rad; at most"
+            f" {cfg.max_xy_stddev_m:.2f} m, {cfg.max_yaw_stddev_rad:.2f} rad)"
         )
+
+    def doubt(self) -> str | None:
+        """Why the pose is not to be trusted now (None: it is, or no localisation reports at all)."""
+        if not self._reported:
+            return None
+        if self._confident_since is None and self._doubt is None:
+            return "the localisation has not reported a confident pose since the last initial pose"
+        return self._doubt
 
     def report(self, stamp: float, covariance: npt.ArrayLike) -> None:
         """The localisation's estimate at ``stamp`` has ``covariance`` (``(3, 3)``: x, y, yaw)."""
         if stamp < self._reset_at:  # computed before the reset, from the belief it replaced
             return
         self._reported = True
-        if not self.confident(covariance):
+        self._doubt = self._why_unsure(covariance)
+        if self._doubt is not None:
             self._confident_since = None
         elif self._confident_since is None:
             self._confident_since = stamp
@@ -81,6 +101,7 @@ class MarkingGate:
         """The localisation was told a new pose at ``now``: no marking until it is confident of it."""
         self._reported = True
         self._confident_since = None
+        self._doubt = None
         self._reset_at = now
 
     def may_mark(self, stamp: float) -> bool:

@@ -225,11 +225,14 @@ class Navigator:
 
     # -- the control step ---------------------------------------------------------------------------------
 
-    def update(self, pose: Pose2D | None, now: float, defer: bool = False, hold: str | None = None) -> NavCommand:
+    def update(
+        self, pose: Pose2D | None, now: float, defer: bool = False, hold: str | None = None, doubt: str | None = None
+    ) -> NavCommand:
         """One control step for the robot at ``pose`` (map frame; ``None`` when unknown) at time ``now``. With
         ``defer`` a needed plan is not made here but returned as the command's ``request`` (module docstring);
         ``hold`` (why; a text that stays the same while the cause lasts) stops the robot and keeps the goal, as a
-        lost pose does."""
+        lost pose does; ``doubt`` (why the pose is not trusted, e.g. a localisation not confident) makes a goal
+        reached at that pose end FAILED with that reason, never reached."""
         if not self._goal.active:
             return NavCommand(0.0, 0.0)
         hold = hold or self._hold_reason(pose, now)
@@ -248,7 +251,7 @@ class Navigator:
         if self._approach is None and distance <= self.config.approach_radius_m:
             self._approach = GoalApproach(*self.goal, self._goal.yaw, self.config.approach)
         if self._approach is not None:
-            return self._approach_step(pose, now, distance, events)
+            return self._approach_step(pose, now, distance, events, doubt)
         if self._policy.note_distance(distance, now):
             self._recoveries.reset()
         if self._rotation is not None and self._pending is None:
@@ -305,16 +308,26 @@ class Navigator:
         margin = self.config.inflation_m + grid.resolution
         return point is not None and math.hypot(point[0] - pose.x, point[1] - pose.y) <= margin
 
-    def _approach_step(self, pose: Pose2D, now: float, distance: float, events: list[NavEvent]) -> NavCommand:
-        """Drive the last centimetres (and turn to the heading); the goal is reached when the approach is done."""
+    def _approach_step(
+        self, pose: Pose2D, now: float, distance: float, events: list[NavEvent], doubt: str | None
+    ) -> NavCommand:
+        """Drive the last centimetres (and turn to the heading); the goal is reached when the approach is done
+        (and the pose is trusted: ``doubt`` None)."""
         assert self._approach is not None
         step = self._approach.command(pose, now)
         if step.done:
             what = self._goal.describe()
             yaw = self._goal.yaw
             heading = "" if yaw is None else f" and {abs(wrap_angle(yaw - pose.yaw)):.3f} rad"
-            self._end(GoalState.REACHED)
-            events.append(NavEvent(EventKind.REACHED, f"{what} reached, {distance:.3f} m{heading} away"))
+            where = f"{distance:.3f} m{heading} away"
+            if doubt is not None:
+                self._end(GoalState.FAILED)
+                events.append(
+                    NavEvent(EventKind.FAILED, f"{what} failed: reached by the estimate ({where}) but {doubt}")
+                )
+            else:
+                self._end(GoalState.REACHED)
+                events.append(NavEvent(EventKind.REACHED, f"{what} reached, {where}"))
             return NavCommand(0.0, 0.0, events=tuple(events))
         cfg = self.config
         u = step.u

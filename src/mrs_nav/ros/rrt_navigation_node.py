@@ -12,8 +12,10 @@ goal (as move_base does) so both take the same path. Service ``make_plan`` (nav_
 moving (an empty path when it finds none); service ``move_base/clear_costmaps`` (std_srvs/Empty) drops every
 obstacle the laser marked, as move_base's. ``amcl_pose`` and ``initialpose`` (geometry_msgs/
 PoseWithCovarianceStamped) decide when scans may mark obstacles (:mod:`mrs_nav.navigation.marking`: only while the
-localisation is confident; a 2D Pose Estimate drops the marks placed so far). Before a goal is aborted the
-recoveries of :mod:`mrs_nav.navigation.recovery` are tried (move_base's parameter names).
+localisation is confident; a 2D Pose Estimate drops the marks placed so far), and a goal reached while the
+localisation is not confident ends ABORTED with that reason, never SUCCEEDED. Before a goal is aborted for failed
+plans or lack of progress the recoveries of :mod:`mrs_nav.navigation.recovery` are tried (move_base's parameter
+names).
 
 Outputs: ``cmd_vel`` (geometry_msgs/Twist) while a goal is active (and a zero Twist when it ends); with
 ``~heartbeat`` also a zero Twist every control period while idle, which is what paces a simulator in lockstep;
@@ -318,10 +320,20 @@ class RrtNavigationNode:
             rospy.logwarn_throttle(5.0, f"rrt_navigation: ignoring amcl_pose: {err}")
             return
         with self._lock:
+            before = self._marking.doubt()
             self._marking.report(msg.header.stamp.to_sec(), covariance)
+            after = self._marking.doubt()
+        if (before is None) != (after is None):
+            rospy.loginfo(
+                f"rrt_navigation: {after}: scans clear but do not mark"
+                if after
+                else "rrt_navigation: the localisation is confident: scans mark obstacles again"
+            )
 
     def _on_initial_pose(self, _msg: PoseWithCovarianceStamped) -> None:
-        """A 2D Pose Estimate: the pose that placed the marks so far was wrong (module docstring)."""
+        """A 2D Pose Estimate: the pose that placed the marks so far was wrong (module docstring). Dated when it
+        arrives, not by its stamp: an estimate the localisation made from its old belief after that stamp, before
+        it took the new pose, must not count as confidence in the new one."""
         with self._lock:
             self._marking.reset(rospy.get_time())
             cleared = self.navigator.clear_marks()
@@ -455,7 +467,8 @@ class RrtNavigationNode:
         blind = self._blind(now.to_sec())
         with self._lock:
             finished = self._finished_plan()
-            command = self.navigator.update(pose, now.to_sec(), defer=True, hold=blind)
+            doubt = self._marking.doubt()
+            command = self.navigator.update(pose, now.to_sec(), defer=True, hold=blind, doubt=doubt)
             if command.request is not None:
                 self._plan = (command.request, self._planner_pool.submit(self.navigator.run_plan, command.request))
             state = self.navigator.state

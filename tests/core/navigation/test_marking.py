@@ -59,3 +59,14 @@ def test_a_reset_without_any_report_before_it_also_stops_marking() -> None:
 def test_bounds_must_be_positive() -> None:
     with pytest.raises(InvalidInputError, match="max_xy_stddev_m"):
         MarkingConfig(max_xy_stddev_m=0.0)
+
+
+def test_doubt_says_why_the_pose_is_not_trusted() -> None:
+    gate = MarkingGate()
+    assert gate.doubt() is None  # no localisation reports (SLAM)
+    gate.reset(1.0)
+    assert "not reported a confident pose since the last initial pose" in (gate.doubt() or "")
+    gate.report(2.0, RVIZ)
+    assert "1 sigma 0.50 m, 0.26 rad" in (gate.doubt() or "")
+    gate.report(3.0, SURE)
+    assert gate.doubt() is None

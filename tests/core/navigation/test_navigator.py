@@ -629,3 +629,19 @@ def test_a_hold_from_the_caller_stops_the_robot_and_it_resumes() -> None:
     assert (both.u, both.omega) == (0.0, 0.0)
     assert "no laser scan" in both.events[0].message  # a changed reason is said again
     assert nav.update(pose, 0.2).u > 0.0
+
+
+def test_a_goal_reached_on_a_pose_in_doubt_fails_with_the_reason() -> None:
+    nav = Navigator(astar, seed=1)
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(-1.3, -1.5, 0.0)
+    pose, now, events = Pose2D(-1.5, -1.5, 0.0), 0.0, []
+    while now < 20.0 and nav.state is GoalState.ACTIVE:
+        cmd = nav.update(pose, now, doubt="the localisation is not confident")
+        events.extend(cmd.events)
+        pose = Pose2D(pose.x + cmd.u * 0.1 * math.cos(pose.yaw), pose.y + cmd.u * 0.1 * math.sin(pose.yaw), pose.yaw)
+        now += 0.1
+    assert nav.state is GoalState.FAILED
+    assert events[-1].kind is EventKind.FAILED
+    assert "reached by the estimate" in events[-1].message
+    assert "the localisation is not confident" in events[-1].message
