@@ -8,8 +8,11 @@ ray tracing never clears them (:mod:`.obstacles`). The rule, fed by the localisa
 Estimate):
 
 * With no report ever received (SLAM, or a localisation that publishes no covariance) every scan marks.
-* Otherwise a scan marks only when the latest report is confident and the scan is stamped no earlier than the
-  first confident report of the current confident spell. Confident: the standard deviation of the position
+* Otherwise a scan marks only when the latest report is confident and the scan is stamped at least ``settle_s``
+  after the first confident report of the current confident spell (the localisation's new ``map -> odom`` must
+  have replaced the old one in tf for the scan's stamp: transforms are dated ahead and interpolated between, so
+  a scan stamped just after a correction is still placed partly by the old one). Confident: the standard
+  deviation of the position
   along its worst axis (the square root of the larger eigenvalue of the x-y covariance) is at most
   ``max_xy_stddev_m`` and that of the heading at most ``max_yaw_stddev_rad``. A report that is not confident ends
   the spell at once.
@@ -40,14 +43,17 @@ __all__ = ["MarkingConfig", "MarkingGate"]
 class MarkingConfig:
     """How confident the localisation must be for scans to mark (1-sigma bounds)."""
 
-    max_xy_stddev_m: float = 0.2
-    max_yaw_stddev_rad: float = 0.2
+    max_xy_stddev_m: float = 0.3
+    max_yaw_stddev_rad: float = 0.3
+    settle_s: float = 1.0
 
     def __post_init__(self) -> None:
         for name in ("max_xy_stddev_m", "max_yaw_stddev_rad"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise InvalidInputError(f"marking {name} must be a positive number, got {value}")
+        if not (math.isfinite(self.settle_s) and self.settle_s >= 0.0):
+            raise InvalidInputError(f"marking settle_s must be a number >= 0, got {self.settle_s}")
 
 
 class MarkingGate:
@@ -108,4 +114,4 @@ class MarkingGate:
         """Whether a scan stamped ``stamp`` may mark obstacles."""
         if not self._reported:
             return True
-        return self._confident_since is not None and stamp >= self._confident_since
+        return self._confident_since is not None and stamp >= self._confident_since + self.config.settle_s

@@ -191,8 +191,8 @@ class RrtNavigationConfig:
             ),
         )
         marking = MarkingConfig(
-            max_xy_stddev_m=private_param("marking_xy_stddev", 0.2),
-            max_yaw_stddev_rad=private_param("marking_yaw_stddev", 0.2),
+            max_xy_stddev_m=private_param("marking_xy_stddev", 0.3),
+            max_yaw_stddev_rad=private_param("marking_yaw_stddev", 0.3),
         )
         seed = private_param("seed", -1)
         max_iterations = private_param("max_iterations", 0)

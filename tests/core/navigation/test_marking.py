@@ -17,14 +17,15 @@ def test_without_a_localisation_report_every_scan_marks() -> None:
 
 
 def test_scans_mark_only_while_the_localisation_is_confident() -> None:
-    gate = MarkingGate(MarkingConfig(max_xy_stddev_m=0.2, max_yaw_stddev_rad=0.2))
+    gate = MarkingGate(MarkingConfig(max_xy_stddev_m=0.2, max_yaw_stddev_rad=0.2, settle_s=0.5))
     gate.report(1.0, RVIZ)
     assert not gate.may_mark(1.1)
     gate.report(2.0, SURE)
     assert not gate.may_mark(1.9)  # placed before the localisation was sure
-    assert gate.may_mark(2.0)
+    assert not gate.may_mark(2.4)  # placed partly by the correction before
+    assert gate.may_mark(2.5)
     gate.report(3.0, SURE)
-    assert gate.may_mark(2.5)  # the same confident spell
+    assert gate.may_mark(2.6)  # the same confident spell
     gate.report(4.0, np.diag([0.01, 0.01, 0.09]))  # 0.3 rad: the heading is not sure
     assert not gate.may_mark(4.1)
 
@@ -47,7 +48,7 @@ def test_a_new_initial_pose_stops_marking_until_a_confident_report_after_it() ->
     gate.report(5.2, RVIZ)
     assert not gate.may_mark(5.5)
     gate.report(6.0, SURE)
-    assert gate.may_mark(6.0)
+    assert gate.may_mark(6.0 + gate.config.settle_s)
 
 
 def test_a_reset_without_any_report_before_it_also_stops_marking() -> None:
