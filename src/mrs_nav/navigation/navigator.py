@@ -17,8 +17,10 @@ are not on the map for planning (:mod:`.obstacles`; a path they block is replann
 than the robot radius plus ``stop_clearance_m`` stops the robot and makes a new plan. Without a pose, when the
 caller says why to hold (e.g. a stale localisation), or when the last map is older than ``map_timeout_s``, the
 robot is stopped and the goal kept (a ``HOLDING`` event names why, and again whenever the reason changes); it
-resumes when all are back. Times are in seconds of the caller's clock (sim time in ROS), distances in metres,
-angles in radians.
+resumes when all are back. Before a goal is given up for failed plans or lack of progress, the recoveries of
+:mod:`.recovery` run (clearing marks, a turn on the spot); a goal reached on a pose the caller doubts (``doubt``:
+a localisation not confident) ends FAILED with that reason. Times are in seconds of the caller's clock (sim time
+in ROS), distances in metres, angles in radians.
 
 With ``update(pose, now, defer=True)`` a needed plan is returned as a :class:`PlanRequest` for a worker
 (:meth:`run_plan`, then :meth:`finish_plan`). Meanwhile the robot follows the current path when the plan is only
