@@ -8,6 +8,8 @@ from dataclasses import dataclass, field
 from mrs_nav.control.goal_approach import ApproachConfig
 from mrs_nav.control.path_following import FollowerConfig
 from mrs_nav.errors import InvalidInputError
+from mrs_nav.navigation.obstacles import OBSTACLE_RANGE_M, RAYTRACE_RANGE_M
+from mrs_nav.navigation.recovery import RecoveryConfig
 from mrs_nav.robot import BURGER_RADIUS
 
 
@@ -28,6 +30,10 @@ class NavigatorConfig:
     # Mark laser returns in unknown cells as obstacles (navigation.obstacles): on for a static saved map, whose
     # unknown cells never fill in; off under SLAM, which adds those walls itself.
     mark_unknown: bool = False
+    # m from the laser: returns up to obstacle_range_m are marked, beams clear marks up to raytrace_range_m
+    # (costmap_2d's obstacle layer; navigation.obstacles)
+    obstacle_range_m: float = OBSTACLE_RANGE_M
+    raytrace_range_m: float = RAYTRACE_RANGE_M
     stray_distance_m: float = 0.3
     replan_period_s: float = 5.0
     improvement_ratio: float = 0.85
@@ -42,9 +48,18 @@ class NavigatorConfig:
     map_timeout_s: float = 0.0  # 0 = off: a static map (published once, latched) never refreshes
     follower: FollowerConfig = field(default_factory=FollowerConfig)
     approach: ApproachConfig = field(default_factory=ApproachConfig)
+    # what is tried before a goal whose plans keep failing, or that makes no progress, is given up
+    recovery: RecoveryConfig = field(default_factory=RecoveryConfig)
 
     def __post_init__(self) -> None:
-        for name in ("approach_radius_m", "stray_distance_m", "improvement_ratio", "progress_m"):
+        for name in (
+            "approach_radius_m",
+            "stray_distance_m",
+            "improvement_ratio",
+            "progress_m",
+            "obstacle_range_m",
+            "raytrace_range_m",
+        ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise InvalidInputError(f"navigator {name} must be a positive number, got {value}")

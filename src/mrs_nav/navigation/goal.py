@@ -44,10 +44,17 @@ class EventKind(Enum):
     HOLDING = "holding"
     RESUMED = "resumed"
     CANCELLED = "cancelled"
+    RECOVERY = "recovery"  # a recovery behaviour started (navigation.recovery)
 
     @property
     def warning(self) -> bool:
-        return self in {EventKind.REFUSED, EventKind.PLAN_FAILED, EventKind.FAILED, EventKind.HOLDING}
+        return self in {
+            EventKind.REFUSED,
+            EventKind.PLAN_FAILED,
+            EventKind.FAILED,
+            EventKind.HOLDING,
+            EventKind.RECOVERY,
+        }
 
 
 @dataclass(frozen=True)

@@ -17,8 +17,10 @@ are not on the map for planning (:mod:`.obstacles`; a path they block is replann
 than the robot radius plus ``stop_clearance_m`` stops the robot and makes a new plan. Without a pose, when the
 caller says why to hold (e.g. a stale localisation), or when the last map is older than ``map_timeout_s``, the
 robot is stopped and the goal kept (a ``HOLDING`` event names why, and again whenever the reason changes); it
-resumes when all are back. Times are in seconds of the caller's clock (sim time in ROS), distances in metres,
-angles in radians.
+resumes when all are back. Before a goal is given up for failed plans or lack of progress, the recoveries of
+:mod:`.recovery` run (clearing marks, a turn on the spot); a goal reached on a pose the caller doubts (``doubt``:
+a localisation not confident) ends FAILED with that reason. Times are in seconds of the caller's clock (sim time
+in ROS), distances in metres, angles in radians.
 
 With ``update(pose, now, defer=True)`` a needed plan is returned as a :class:`PlanRequest` for a worker
 (:meth:`run_plan`, then :meth:`finish_plan`). Meanwhile the robot follows the current path when the plan is only
@@ -56,6 +58,7 @@ from mrs_nav.navigation.plan_worker import (
     rrt_planner,
     run_plan,
 )
+from mrs_nav.navigation.recovery import Recoveries, RecoveryBehavior, Rotation
 from mrs_nav.navigation.replanning import ReplanPolicy, densify, first_blocked_point
 from mrs_nav.planning import PlanResult, path_length
 
@@ -102,7 +105,10 @@ class Navigator:
         self.last_plan: PlanResult | None = None
         self.plans_made = 0
         self._grid: OccupancyGrid | None = None
-        self._obstacles = ScanObstacles(mark_unknown=self.config.mark_unknown)
+        cfg = self.config
+        self._obstacles = ScanObstacles(
+            mark_unknown=cfg.mark_unknown, obstacle_range_m=cfg.obstacle_range_m, raytrace_range_m=cfg.raytrace_range_m
+        )
         self._marked_grid: OccupancyGrid | None = None
         self._returns: FloatArray = np.zeros((0, 2))
         self._approach: GoalApproach | None = None
@@ -111,6 +117,8 @@ class Navigator:
         self._follower: PathFollower | None = None
         self._holding: str | None = None  # why the robot is held, as last reported
         self._pending: PlanRequest | None = None
+        self._recoveries = Recoveries(cfg.recovery)
+        self._rotation: Rotation | None = None  # a rotate_recovery under way
 
     @property
     def state(self) -> GoalState:
@@ -131,15 +139,27 @@ class Navigator:
         self._map_stamp = now
         self._policy.new_map()
 
-    def set_scan(self, origin: npt.ArrayLike, ends: npt.ArrayLike, hit: npt.ArrayLike) -> None:
+    def set_scan(self, origin: npt.ArrayLike, ends: npt.ArrayLike, hit: npt.ArrayLike, mark: bool = True) -> None:
         """Take a laser scan in the map frame: the laser's position ``origin`` (``(2,)``), the beam end points
-        ``ends`` (``(N, 2)``, at the return or the maximum range) and ``hit`` (``(N,)`` bool, a return)."""
+        ``ends`` (``(N, 2)``, at the return or the maximum range) and ``hit`` (``(N,)`` bool, a return). Without
+        ``mark`` it only clears (:mod:`.marking`: the pose that placed it is not trusted)."""
         ends = np.asarray(ends, dtype=np.float64).reshape(-1, 2)
         self._returns = ends[np.asarray(hit, dtype=bool)]
-        if self._obstacles.add_scan(origin, ends, hit):
-            self._marked_grid = None
-            self._plan_grid = None
-            self._policy.new_map()
+        if self._obstacles.add_scan(origin, ends, hit, mark):
+            self._marks_changed()
+
+    def clear_marks(self, around: npt.ArrayLike | None = None, beyond_m: float = 0.0) -> int:
+        """Drop the marks farther than ``beyond_m`` from ``around`` (None: all; move_base's ``clear_costmaps``);
+        how many cells were unmarked."""
+        cleared = self._obstacles.clear(around, beyond_m)
+        if cleared:
+            self._marks_changed()
+        return cleared
+
+    def _marks_changed(self) -> None:
+        self._marked_grid = None
+        self._plan_grid = None
+        self._policy.new_map()
 
     @property
     def grid(self) -> OccupancyGrid | None:
@@ -193,6 +213,8 @@ class Navigator:
         self._approach = None
         self._holding = None
         self._pending = None  # a plan in flight for this goal is now stale
+        self._rotation = None
+        self._recoveries.reset()
 
     def _end(self, state: GoalState) -> None:
         self._reset_goal()
@@ -205,11 +227,14 @@ class Navigator:
 
     # -- the control step ---------------------------------------------------------------------------------
 
-    def update(self, pose: Pose2D | None, now: float, defer: bool = False, hold: str | None = None) -> NavCommand:
+    def update(
+        self, pose: Pose2D | None, now: float, defer: bool = False, hold: str | None = None, doubt: str | None = None
+    ) -> NavCommand:
         """One control step for the robot at ``pose`` (map frame; ``None`` when unknown) at time ``now``. With
         ``defer`` a needed plan is not made here but returned as the command's ``request`` (module docstring);
         ``hold`` (why; a text that stays the same while the cause lasts) stops the robot and keeps the goal, as a
-        lost pose does."""
+        lost pose does; ``doubt`` (why the pose is not trusted, e.g. a localisation not confident) makes a goal
+        reached at that pose end FAILED with that reason, never reached."""
         if not self._goal.active:
             return NavCommand(0.0, 0.0)
         hold = hold or self._hold_reason(pose, now)
@@ -228,12 +253,25 @@ class Navigator:
         if self._approach is None and distance <= self.config.approach_radius_m:
             self._approach = GoalApproach(*self.goal, self._goal.yaw, self.config.approach)
         if self._approach is not None:
-            return self._approach_step(pose, now, distance, events)
-        self._policy.note_distance(distance, now)
+            return self._approach_step(pose, now, distance, events, doubt)
+        if self._policy.note_distance(distance, now):
+            self._recoveries.reset()
+        if self._rotation is not None and self._pending is None:
+            omega = self._rotation.command(pose, now)
+            if omega is not None:
+                return NavCommand(0.0, omega, events=tuple(events))
+            self._rotation = None
 
         new_path: FloatArray | None = None
         request: PlanRequest | None = None
         reason = None if self._pending is not None else self.replan_reason(pose, now)
+        if reason == "stuck":
+            timeout = self.config.progress_timeout_s
+            if not self._recover(pose, now, f"no progress for {timeout:.0f} s", events):
+                self._end_failed(f"no progress for {timeout:.0f} s", events)
+                return NavCommand(0.0, 0.0, events=tuple(events))
+            if self._rotation is not None:
+                return NavCommand(0.0, self._rotation.command(pose, now) or 0.0, events=tuple(events))
         if reason is None and self._pending is None and self._follower is not None and self._driving_into(pose):
             reason = "obstacle ahead"
         if reason is not None:
@@ -272,16 +310,26 @@ class Navigator:
         margin = self.config.inflation_m + grid.resolution
         return point is not None and math.hypot(point[0] - pose.x, point[1] - pose.y) <= margin
 
-    def _approach_step(self, pose: Pose2D, now: float, distance: float, events: list[NavEvent]) -> NavCommand:
-        """Drive the last centimetres (and turn to the heading); the goal is reached when the approach is done."""
+    def _approach_step(
+        self, pose: Pose2D, now: float, distance: float, events: list[NavEvent], doubt: str | None
+    ) -> NavCommand:
+        """Drive the last centimetres (and turn to the heading); the goal is reached when the approach is done
+        (and the pose is trusted: ``doubt`` None)."""
         assert self._approach is not None
         step = self._approach.command(pose, now)
         if step.done:
             what = self._goal.describe()
             yaw = self._goal.yaw
             heading = "" if yaw is None else f" and {abs(wrap_angle(yaw - pose.yaw)):.3f} rad"
-            self._end(GoalState.REACHED)
-            events.append(NavEvent(EventKind.REACHED, f"{what} reached, {distance:.3f} m{heading} away"))
+            where = f"{distance:.3f} m{heading} away"
+            if doubt is not None:
+                self._end(GoalState.FAILED)
+                events.append(
+                    NavEvent(EventKind.FAILED, f"{what} failed: reached by the estimate ({where}) but {doubt}")
+                )
+            else:
+                self._end(GoalState.REACHED)
+                events.append(NavEvent(EventKind.REACHED, f"{what} reached, {where}"))
             return NavCommand(0.0, 0.0, events=tuple(events))
         cfg = self.config
         u = step.u
@@ -372,10 +420,8 @@ class Navigator:
             events.append(
                 NavEvent(EventKind.PLAN_FAILED, f"planning ({reason}) failed ({self._policy.failures}/{limit}): {why}")
             )
-            if failed:
-                what = self._goal.describe()
-                self._end(GoalState.FAILED)
-                events.append(NavEvent(EventKind.FAILED, f"{what} failed: {limit} plans failed; last: {why}"))
+            if failed and not self._recover(request.pose, request.now, f"{limit} failed plans", events):
+                self._end_failed(f"{limit} plans failed", events, f"; last: {why}")
             return None
         path = self._with_goal(result.path)
         if (
@@ -395,6 +441,36 @@ class Navigator:
             )
         )
         return path
+
+    def _recover(self, pose: Pose2D, now: float, why: str, events: list[NavEvent]) -> bool:
+        """Start the next recovery behaviour (:mod:`.recovery`) for the robot at ``pose``; False when none is
+        left."""
+        behavior = self._recoveries.next()
+        if behavior is None:
+            return False
+        cfg = self.config.recovery
+        if behavior is RecoveryBehavior.CONSERVATIVE_RESET:
+            count = self.clear_marks((pose.x, pose.y), cfg.conservative_reset_dist_m)
+            what = f"cleared {count} marked cells farther than {cfg.conservative_reset_dist_m:.2f} m"
+        elif behavior is RecoveryBehavior.AGGRESSIVE_RESET:
+            what = f"cleared all {self.clear_marks()} marked cells"
+        else:
+            self._rotation = Rotation(cfg, now)
+            what = "turning a full circle on the spot"
+        self._follower = None
+        self.path = None
+        self._policy.recovered(now)
+        step = self._recoveries.describe()
+        events.append(NavEvent(EventKind.RECOVERY, f"recovery {step} ({behavior.value}) after {why}: {what}"))
+        return True
+
+    def _end_failed(self, why: str, events: list[NavEvent], last: str = "") -> None:
+        """Abort the goal for ``why``, naming the recoveries tried in vain."""
+        tried = ", ".join(b.value for b in self._recoveries.tried)
+        after = f" after recoveries ({tried})" if tried else ""
+        what = self._goal.describe()
+        self._end(GoalState.FAILED)
+        events.append(NavEvent(EventKind.FAILED, f"{what} failed: {why}{after}{last}"))
 
     def _with_goal(self, path: FloatArray) -> FloatArray:
         """The planned path, ending exactly at the goal (planners stop within their own tolerance of it)."""

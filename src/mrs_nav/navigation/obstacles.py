@@ -2,15 +2,23 @@
 planning, cleared again when the laser sees through them, and the check that keeps the robot from driving into
 a beam return.
 
-:class:`ScanObstacles` keeps a layer of marked cells over the map. Each scan (in the map frame: the laser's
-position and the beam end points, ``hit`` where the beam returned) first clears the marks on the cells every
-beam passed through (up to the cell before its return), then marks the cells of returns that the map has as
-free and that lie farther than ``map_tolerance_m`` from every occupied cell of the map (so range noise on mapped
-walls marks nothing). Returns in unknown cells are left to the map while SLAM explores (they are the walls it is
-about to add, and marking them would re-inflate the planning grid at every scan); with ``mark_unknown`` (a static
-saved map, which never fills its unknown cells) they are marked too, or the planner would keep planning through
-the unmapped wall of a room it is in. The planner then sees the map with the marks as occupied
-(:meth:`ScanObstacles.apply`).
+:class:`ScanObstacles` keeps a layer of marked cells over the map, as costmap_2d's obstacle layer does. Each scan
+(in the map frame: the laser's position and the beam end points, ``hit`` where the beam returned) first clears
+the marks on every cell a beam crosses up to ``raytrace_range_m`` from the laser (all of them, found by walking
+the beam across the grid lines, up to the cell of its return, which is then marked again if it is still there),
+then marks the cells of returns within ``obstacle_range_m`` that the map has as free and that lie farther than
+``map_tolerance_m`` from every occupied cell of the map (so range noise on mapped walls marks nothing). Marking
+reaches less far than clearing (costmap_2d's rule): a mark placed from one spot is crossed by the beams of the
+next scans from about the same spot, and one placed from a pose a little off is still within their reach.
+Returns in unknown cells are left to the map while SLAM explores (they are the walls it is about to add, and
+marking them would re-inflate the planning grid at every scan); with ``mark_unknown`` (a static saved map, which
+never fills its unknown cells) they are marked too, or the planner would keep planning through the unmapped
+wall of a room it is in. The planner then sees the map with the marks as occupied (:meth:`ScanObstacles.apply`).
+
+What ray tracing cannot clear: marks in cells no later beam crosses (behind a wall, seen from where the robot is
+now, or beyond the clearing range). Such marks come from scans placed at a wrong pose; :mod:`.marking` decides
+when scans may mark at all, and :meth:`ScanObstacles.clear` drops marks (move_base's ``clear_costmaps`` and its
+clearing recoveries).
 """
 
 from __future__ import annotations
@@ -28,14 +36,26 @@ from mrs_nav.navigation.plan_worker import cell_centres
 # Returns this close to a mapped obstacle are that obstacle (range noise, drift of the pose estimate); up to the
 # inflation distance this hides nothing from the planner, which keeps that far from the mapped obstacle anyway.
 MAP_TOLERANCE_M = 0.2
+# m from the laser: returns up to here are marked, beams clear up to there (TurtleBot3 Burger's costmap values;
+# the laser reaches 3.5 m).
+OBSTACLE_RANGE_M = 3.0
+RAYTRACE_RANGE_M = 3.5
 
 
 class ScanObstacles:
     """The marked cells of one map (re-projected when a new map of another shape or origin comes)."""
 
-    def __init__(self, map_tolerance_m: float = MAP_TOLERANCE_M, mark_unknown: bool = False) -> None:
+    def __init__(
+        self,
+        map_tolerance_m: float = MAP_TOLERANCE_M,
+        mark_unknown: bool = False,
+        obstacle_range_m: float = OBSTACLE_RANGE_M,
+        raytrace_range_m: float = RAYTRACE_RANGE_M,
+    ) -> None:
         self.map_tolerance_m = map_tolerance_m
         self.mark_unknown = mark_unknown
+        self.obstacle_range_m = obstacle_range_m
+        self.raytrace_range_m = raytrace_range_m
         self._raw: OccupancyGrid | None = None
         self._markable: BoolArray | None = None  # free (or unknown) on the map and away from its obstacles
         self.marks: BoolArray | None = None
@@ -56,36 +76,38 @@ class ScanObstacles:
         rows, cols = np.nonzero(marks)
         self._mark(cell_centres(old, rows, cols))
 
-    def add_scan(self, origin: npt.ArrayLike, ends: npt.ArrayLike, hit: npt.ArrayLike) -> bool:
-        """Clear along the beams from ``origin`` (``(2,)``, m, map frame) to ``ends`` (``(N, 2)``) and mark the
-        returns (``hit``, ``(N,)`` bool) not on the map. Whether the marks changed."""
+    def add_scan(self, origin: npt.ArrayLike, ends: npt.ArrayLike, hit: npt.ArrayLike, mark: bool = True) -> bool:
+        """Clear along the beams from ``origin`` (``(2,)``, m, map frame) to ``ends`` (``(N, 2)``) and, with
+        ``mark``, mark the returns (``hit``, ``(N,)`` bool) not on the map. Whether the marks changed."""
         if self._raw is None or self.marks is None:
             return False
         o = np.asarray(origin, dtype=np.float64)[:2]
         e = np.asarray(ends, dtype=np.float64).reshape(-1, 2)
         returned = np.asarray(hit, dtype=bool).reshape(-1)
         before = self.marks.copy()
+        lengths = np.hypot(*(e - o).T)
         if before.any():  # nothing to clear otherwise: the common case costs no ray casting
-            self._clear(o, e, returned)
-        self._mark(e[returned])
+            # a beam longer than the clearing range clears up to it, and its end cell is not a return there
+            scale = np.minimum(1.0, self.raytrace_range_m / np.maximum(lengths, 1e-9))
+            rows, cols = beam_cells(self._raw, o, o + scale[:, None] * (e - o), returned & (scale >= 1.0))
+            self.marks[rows, cols] = False
+        if mark:
+            self._mark(e[returned & (lengths <= self.obstacle_range_m)])
         return not np.array_equal(before, self.marks)
 
-    def _clear(self, o: FloatArray, e: FloatArray, returned: BoolArray) -> None:
-        """Unmark the cells the beams from ``o`` to ``e`` passed through."""
-        assert self._raw is not None
-        assert self.marks is not None
-        raw = self._raw
-        # sample each beam every half cell up to one cell short of its return (the whole beam when none)
-        lengths = np.hypot(*(e - o).T)
-        reach = np.where(returned, lengths - raw.resolution, lengths)
-        step = raw.resolution / 2.0
-        counts = np.maximum(np.floor(reach / step).astype(np.intp), 0)
-        if counts.sum():
-            beam = np.repeat(np.arange(e.shape[0]), counts)
-            t = (np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)) * step
-            direction = (e - o) / np.maximum(lengths, 1e-9)[:, None]
-            rows, cols, inside = raw.cells(o + t[:, None] * direction[beam])
-            self.marks[rows[inside], cols[inside]] = False
+    def clear(self, around: npt.ArrayLike | None = None, beyond_m: float = 0.0) -> int:
+        """Drop the marks farther than ``beyond_m`` from ``around`` (``(2,)``, m, map frame; None: all of them),
+        as move_base's clearing recoveries do. How many cells were unmarked."""
+        if self._raw is None or self.marks is None or not self.marks.any():
+            return 0
+        rows, cols = np.nonzero(self.marks)
+        if around is not None:
+            centres = cell_centres(self._raw, rows, cols)
+            p = np.asarray(around, dtype=np.float64)[:2]
+            far = np.hypot(centres[:, 0] - p[0], centres[:, 1] - p[1]) > beyond_m
+            rows, cols = rows[far], cols[far]
+        self.marks[rows, cols] = False
+        return int(rows.size)
 
     def _mark(self, points: FloatArray) -> None:
         assert self._raw is not None
@@ -103,6 +125,46 @@ class ScanObstacles:
         values = raw.values.copy()
         values[self.marks] = OCCUPIED
         return OccupancyGrid(values, raw.resolution, raw.origin)
+
+
+def beam_cells(
+    grid: OccupancyGrid, origin: FloatArray, ends: FloatArray, returned: BoolArray
+) -> tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]]:
+    """Rows and columns (inside ``grid``) of every cell the beams from ``origin`` (``(2,)``) to ``ends``
+    (``(N, 2)``) cross, without the end cell of a beam that ``returned`` (``(N,)``): each beam is cut where it
+    crosses a grid line and the cell of each piece's middle taken, so no cell it touches is skipped (a beam
+    sampled at fixed steps can skip the corner of a cell, and with it a diagonal line of marks)."""
+    x0, y0, yaw = grid.origin
+    c, s = math.cos(yaw), math.sin(yaw)
+    points = np.vstack((origin[None, :], ends)) - (x0, y0)
+    uv = np.column_stack((c * points[:, 0] + s * points[:, 1], -s * points[:, 0] + c * points[:, 1]))
+    uv /= grid.resolution  # in cells, along the grid's columns and rows
+    start, stop = uv[0], uv[1:]
+    n = stop.shape[0]
+    pieces = [np.zeros(n), np.ones(n)]
+    beams = [np.arange(n), np.arange(n)]
+    for axis in (0, 1):
+        low = np.floor(np.minimum(start[axis], stop[:, axis]))
+        counts = (np.floor(np.maximum(start[axis], stop[:, axis])) - low).astype(np.intp)
+        beam = np.repeat(np.arange(n), counts)
+        lines = low[beam] + 1.0 + np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+        span = stop[beam, axis] - start[axis]
+        pieces.append((lines - start[axis]) / np.where(span == 0.0, 1.0, span))
+        beams.append(beam)
+    t, beam = np.concatenate(pieces), np.concatenate(beams)
+    order = np.argsort(beam * 2.0 + t)  # by beam, then along it (t lies in [0, 1])
+    t, beam = t[order], beam[order]
+    same = beam[1:] == beam[:-1]
+    middle = (t[1:] + t[:-1])[same] / 2.0
+    which = beam[1:][same]
+    last = np.ones(which.size, dtype=bool)  # the piece that ends a beam holds its end cell
+    last[:-1] = which[1:] != which[:-1]
+    keep = ~(last & returned[which])
+    middle, which = middle[keep], which[keep]
+    cells = start + middle[:, None] * (stop[which] - start)
+    col, row = np.floor(cells[:, 0]).astype(np.intp), np.floor(cells[:, 1]).astype(np.intp)
+    inside = (col >= 0) & (col < grid.width) & (row >= 0) & (row < grid.height)
+    return row[inside], col[inside]
 
 
 def beam_ends(

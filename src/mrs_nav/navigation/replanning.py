@@ -78,11 +78,20 @@ class ReplanPolicy:
         self._best_distance = math.inf
         self._progress_time = now
 
-    def note_distance(self, distance: float, now: float) -> None:
-        """The robot is ``distance`` from the goal at ``now`` (progress is measured against the best so far)."""
+    def note_distance(self, distance: float, now: float) -> bool:
+        """The robot is ``distance`` from the goal at ``now`` (progress is measured against the best so far);
+        whether that is progress."""
         if distance < self._best_distance - self.config.progress_m:
             self._best_distance = distance
             self._progress_time = now
+            return True
+        return False
+
+    def recovered(self, now: float) -> None:
+        """A recovery ran at ``now``: plan afresh at once, and count failures and progress from here."""
+        self.failures = 0
+        self.last_plan_time = -math.inf
+        self._progress_time = now
 
     def reason(
         self, follower: PathFollower | None, pose: Pose2D, now: float, grid: OccupancyGrid, raw: OccupancyGrid

@@ -9,7 +9,13 @@ heading) on the ``move_base`` action (move_base_msgs/MoveBaseAction: goal, cance
 feedback ``base_position`` every control period, result; status SUCCEEDED, ABORTED or REJECTED with a text
 reason, PREEMPTED) or on ``move_base_simple/goal`` (geometry_msgs/PoseStamped), which is re-sent as an action
 goal (as move_base does) so both take the same path. Service ``make_plan`` (nav_msgs/GetPlan) plans without
-moving (an empty path when it finds none).
+moving (an empty path when it finds none); service ``move_base/clear_costmaps`` (std_srvs/Empty) drops every
+obstacle the laser marked, as move_base's. ``amcl_pose`` and ``initialpose`` (geometry_msgs/
+PoseWithCovarianceStamped) decide when scans may mark obstacles (:mod:`mrs_nav.navigation.marking`: only while the
+localisation is confident; a 2D Pose Estimate drops the marks placed so far), and a goal reached while the
+localisation is not confident ends ABORTED with that reason, never SUCCEEDED. Before a goal is aborted for failed
+plans or lack of progress the recoveries of :mod:`mrs_nav.navigation.recovery` are tried (move_base's parameter
+names).
 
 Outputs: ``cmd_vel`` (geometry_msgs/Twist) while a goal is active (and a zero Twist when it ends); with
 ``~heartbeat`` also a zero Twist every control period while idle, which is what paces a simulator in lockstep;
@@ -46,7 +52,7 @@ import actionlib
 import numpy as np
 import rospy
 import tf2_ros
-from geometry_msgs.msg import PoseStamped, Twist
+from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Twist
 from move_base_msgs.msg import MoveBaseAction, MoveBaseActionGoal, MoveBaseFeedback, MoveBaseResult
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Path
@@ -54,6 +60,7 @@ from nav_msgs.srv import GetPlan, GetPlanRequest, GetPlanResponse
 from rospy.numpy_msg import numpy_msg
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
+from std_srvs.srv import Empty, EmptyRequest, EmptyResponse
 
 from mrs_nav.config_files import node_default, node_defaults
 from mrs_nav.control.goal_approach import ApproachConfig
@@ -61,6 +68,7 @@ from mrs_nav.control.path_following import FollowerConfig
 from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
+from mrs_nav.navigation.marking import MarkingConfig, MarkingGate
 from mrs_nav.navigation.navigator import (
     PLANNERS,
     EventKind,
@@ -74,8 +82,10 @@ from mrs_nav.navigation.navigator import (
     rrt_planner,
 )
 from mrs_nav.navigation.plan_worker import run_plan
+from mrs_nav.navigation.recovery import RecoveryConfig
 from mrs_nav.ros.clock_jump import TimeJumpGuard, keep_status_timer
 from mrs_nav.ros.conversions import pose_msg
+from mrs_nav.ros.localisation_node import covariance_3x3
 from mrs_nav.ros.navigation_conversions import (
     goal_heading,
     grid_from_msg,
@@ -95,6 +105,7 @@ STATUS_OF_EVENT = {
     EventKind.PLAN_FAILED: "active",
     EventKind.HOLDING: "active",
     EventKind.RESUMED: "active",
+    EventKind.RECOVERY: "active",
     EventKind.PREEMPTED: "preempted",
     EventKind.CANCELLED: "preempted",
     EventKind.REFUSED: "refused",
@@ -139,9 +150,23 @@ def _navigator(values: Mapping[str, Any]) -> NavigatorConfig:
         retry_delay_s=values["retry_delay"],
         progress_timeout_s=values["progress_timeout"],
         map_timeout_s=values["map_timeout"],
+        obstacle_range_m=values["obstacle_range"],
+        raytrace_range_m=values["raytrace_range"],
         follower=follower,
         approach=approach,
+        recovery=RecoveryConfig.from_move_base(
+            recovery_behavior_enabled=values["recovery_behavior_enabled"],
+            clearing_rotation_allowed=values["clearing_rotation_allowed"],
+            recovery_behaviors=_recovery_names(values["recovery_behaviors"]),
+            conservative_reset_dist=values["conservative_reset_dist"],
+            rotation_speed=max_angular,
+        ),
     )
+
+
+def _marking(values: Mapping[str, Any]) -> MarkingConfig:
+    """When scans may mark the costmap (the localisation's confidence), from the parameters."""
+    return MarkingConfig(max_xy_stddev_m=values["marking_xy_stddev"], max_yaw_stddev_rad=values["marking_yaw_stddev"])
 
 
 @dataclass(frozen=True)
@@ -164,6 +189,7 @@ class RrtNavigationConfig:
     seed: int | None = None  # None (~seed < 0): random
     heartbeat: bool = _default("heartbeat")
     navigator: NavigatorConfig = field(default_factory=lambda: _navigator(node_defaults(NODE)))
+    marking: MarkingConfig = field(default_factory=lambda: _marking(node_defaults(NODE)))
 
     def __post_init__(self) -> None:
         if self.planner not in PLANNERS:
@@ -204,7 +230,19 @@ class RrtNavigationConfig:
             seed=None if seed < 0 else seed,
             heartbeat=values["heartbeat"],
             navigator=_navigator(values),
+            marking=_marking(values),
         )
+
+
+def _recovery_names(value: Any) -> list[str]:
+    """``~recovery_behaviors``: the names of the recoveries in order, as strings or as move_base's
+    ``{name: ..., type: ...}`` entries (the name is what counts)."""
+    if not isinstance(value, list):
+        raise InvalidInputError(f"~recovery_behaviors: expected a list, got {value!r}")
+    names = [entry.get("name") if isinstance(entry, dict) else entry for entry in value]
+    if not all(isinstance(name, str) for name in names):
+        raise InvalidInputError(f"~recovery_behaviors: expected names, got {value!r}")
+    return [str(name) for name in names]
 
 
 class RrtNavigationNode:
@@ -214,6 +252,7 @@ class RrtNavigationNode:
         self.config = config
         self._planner = rrt_planner(config.planner, config.time_budget_s, config.max_iterations)
         self.navigator = Navigator(self._planner, config.navigator, seed=config.seed)
+        self._marking = MarkingGate(config.marking)
         self._query_rng = np.random.default_rng(None if config.seed is None else config.seed + 1)
         self._lock = threading.Lock()
         self._tf_buffer = tf2_ros.Buffer()
@@ -250,8 +289,11 @@ class RrtNavigationNode:
             rospy.Subscriber("map", numpy_msg(OccupancyGridMsg), self._on_map, queue_size=1),
             rospy.Subscriber("scan", LaserScan, self._on_scan, queue_size=1),
             rospy.Subscriber("move_base_simple/goal", PoseStamped, self._on_simple_goal, queue_size=1),
+            rospy.Subscriber("amcl_pose", PoseWithCovarianceStamped, self._on_localisation, queue_size=10),
+            rospy.Subscriber("initialpose", PoseWithCovarianceStamped, self._on_initial_pose, queue_size=1),
         ]
         self._plan_service = rospy.Service("make_plan", GetPlan, self._on_make_plan)
+        self._clear_service = rospy.Service("move_base/clear_costmaps", Empty, self._on_clear_costmaps)
         # The planner thread holds the GIL for long stretches; the default 5 ms switch interval would delay each
         # /clock, /tf and timer hand-off of the control loop by up to that, which is what paces a lockstep sim.
         sys.setswitchinterval(0.0005)
@@ -287,8 +329,43 @@ class RrtNavigationNode:
             rospy.logwarn_throttle(5.0, f"rrt_navigation: dropping scan, no transform to the map: {err}")
             return
         with self._lock:
-            self.navigator.set_scan(origin, ends, hit)
+            self.navigator.set_scan(origin, ends, hit, self._marking.may_mark(msg.header.stamp.to_sec()))
             self._last_scan = rospy.get_time()
+
+    def _on_localisation(self, msg: PoseWithCovarianceStamped) -> None:
+        try:
+            covariance = covariance_3x3(msg)
+        except MrsNavError as err:
+            rospy.logwarn_throttle(5.0, f"rrt_navigation: ignoring amcl_pose: {err}")
+            return
+        with self._lock:
+            before = self._marking.doubt()
+            self._marking.report(msg.header.stamp.to_sec(), covariance)
+            after = self._marking.doubt()
+        if (before is None) != (after is None):
+            rospy.loginfo(
+                f"rrt_navigation: {after}: scans clear but do not mark"
+                if after
+                else "rrt_navigation: the localisation is confident: scans mark obstacles again"
+            )
+
+    def _on_initial_pose(self, _msg: PoseWithCovarianceStamped) -> None:
+        """A 2D Pose Estimate: the pose that placed the marks so far was wrong (module docstring). Dated when it
+        arrives, not by its stamp: an estimate the localisation made from its old belief after that stamp, before
+        it took the new pose, must not count as confidence in the new one."""
+        with self._lock:
+            self._marking.reset(rospy.get_time())
+            cleared = self.navigator.clear_marks()
+        rospy.loginfo(
+            f"rrt_navigation: new initial pose: dropped {cleared} marked cells; marking resumes once the"
+            " localisation is confident"
+        )
+
+    def _on_clear_costmaps(self, _req: EmptyRequest) -> EmptyResponse:
+        with self._lock:
+            cleared = self.navigator.clear_marks()
+        rospy.loginfo(f"rrt_navigation: clear_costmaps: dropped {cleared} marked cells")
+        return EmptyResponse()
 
     def _on_simple_goal(self, msg: PoseStamped) -> None:
         """Re-send an rviz goal as an action goal, as move_base does, so that it takes the action's path."""
@@ -402,7 +479,8 @@ class RrtNavigationNode:
         blind = self._blind(now.to_sec())
         with self._lock:
             finished = self._finished_plan()
-            command = self.navigator.update(pose, now.to_sec(), defer=True, hold=blind)
+            doubt = self._marking.doubt()
+            command = self.navigator.update(pose, now.to_sec(), defer=True, hold=blind, doubt=doubt)
             if command.request is not None:
                 self._plan = (command.request, self._planner_pool.submit(self.navigator.run_plan, command.request))
             state = self.navigator.state

@@ -22,6 +22,7 @@ from mrs_nav.navigation.navigator import (
     densify,
 )
 from mrs_nav.navigation.obstacles import return_ahead
+from mrs_nav.navigation.recovery import RecoveryConfig
 from mrs_nav.planning import PlanResult, headings_along, path_length
 from mrs_nav.robot import BURGER_RADIUS
 
@@ -255,7 +256,9 @@ def test_repeated_planning_failures_end_the_goal_as_failed(deferred: bool) -> No
     def never(grid: OccupancyGrid, start: Pose2D, goal: tuple[float, float], rng) -> PlanResult:
         raise NoPathFoundError("time budget used up")
 
-    nav = Navigator(never, NavigatorConfig(max_failed_plans=3, retry_delay_s=1.0))
+    # without recoveries (test_recovery: with them)
+    config = NavigatorConfig(max_failed_plans=3, retry_delay_s=1.0, recovery=RecoveryConfig(behaviors=()))
+    nav = Navigator(never, config)
     nav.set_map(arena(), 0.0)
     nav.set_goal(1.5, 1.5, 0.0)
     start = Pose2D(-1.5, -1.5, 0.0)
@@ -268,7 +271,7 @@ def test_repeated_planning_failures_end_the_goal_as_failed(deferred: bool) -> No
 
 def test_a_goal_walled_off_is_reported_failed_not_chased() -> None:
     grid = with_wall(arena(), -2.0, 0.9, 2.0, 1.0)  # a wall right across the room
-    nav = Navigator(astar, NavigatorConfig(max_failed_plans=2))
+    nav = Navigator(astar, NavigatorConfig(max_failed_plans=2, recovery=RecoveryConfig(behaviors=())))
     nav.set_map(grid, 0.0)
     nav.set_goal(1.5, 1.5, 0.0)
     drive(nav, Pose2D(-1.5, -1.5, 0.0), 10.0)
@@ -626,3 +629,19 @@ def test_a_hold_from_the_caller_stops_the_robot_and_it_resumes() -> None:
     assert (both.u, both.omega) == (0.0, 0.0)
     assert "no laser scan" in both.events[0].message  # a changed reason is said again
     assert nav.update(pose, 0.2).u > 0.0
+
+
+def test_a_goal_reached_on_a_pose_in_doubt_fails_with_the_reason() -> None:
+    nav = Navigator(astar, seed=1)
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(-1.3, -1.5, 0.0)
+    pose, now, events = Pose2D(-1.5, -1.5, 0.0), 0.0, []
+    while now < 20.0 and nav.state is GoalState.ACTIVE:
+        cmd = nav.update(pose, now, doubt="the localisation is not confident")
+        events.extend(cmd.events)
+        pose = Pose2D(pose.x + cmd.u * 0.1 * math.cos(pose.yaw), pose.y + cmd.u * 0.1 * math.sin(pose.yaw), pose.yaw)
+        now += 0.1
+    assert nav.state is GoalState.FAILED
+    assert events[-1].kind is EventKind.FAILED
+    assert "reached by the estimate" in events[-1].message
+    assert "the localisation is not confident" in events[-1].message
