@@ -14,7 +14,7 @@ from collections.abc import Sequence
 import numpy as np
 import numpy.typing as npt
 import rospy
-from geometry_msgs.msg import Pose, Quaternion, Transform, TransformStamped, Twist
+from geometry_msgs.msg import Pose, PoseWithCovarianceStamped, Quaternion, Transform, TransformStamped, Twist
 from nav_msgs.msg import Odometry as OdometryMsg
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState, LaserScan
@@ -204,3 +204,14 @@ def any_reading(ranges: FloatArray) -> bool:
 def valid_ranges(msg: LaserScan, ranges: FloatArray) -> npt.NDArray[np.bool_]:
     """Boolean mask of the beams with a finite reading within [range_min, range_max]."""
     return np.isfinite(ranges) & (ranges >= float(msg.range_min)) & (ranges <= float(msg.range_max))
+
+
+COV_INDEX = (0, 1, 5)  # x, y, yaw rows/columns of a 6x6 pose covariance
+
+
+def covariance_3x3(msg: PoseWithCovarianceStamped) -> FloatArray:
+    """The x, y, yaw block of a PoseWithCovarianceStamped's 6x6 covariance (InvalidInputError unless 36 values)."""
+    full = np.asarray(msg.pose.covariance, dtype=np.float64)
+    if full.size != 36:
+        raise InvalidInputError(f"pose covariance has {full.size} values, expected 36")
+    return full.reshape(6, 6)[np.ix_(COV_INDEX, COV_INDEX)]

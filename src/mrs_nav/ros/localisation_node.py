@@ -51,14 +51,13 @@ from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.geometry import FloatArray, Pose2D, format_point
 from mrs_nav.localisation import BeamScan, LocalisationConfig, ParticleFilter, PoseEstimate
 from mrs_nav.ros.clock_jump import TimeJumpGuard
-from mrs_nav.ros.conversions import pose_from_msg, pose_msg
+from mrs_nav.ros.conversions import COV_INDEX, covariance_3x3, pose_from_msg, pose_msg
 from mrs_nav.ros.map_odom import MapOdomBroadcaster, check_timing, lookup_pose, tf_state
 from mrs_nav.ros.navigation_conversions import grid_from_msg
 from mrs_nav.ros.params import private_params
 
 NODE = "localisation"
 _default = functools.partial(node_default, NODE)
-_COV_INDEX = (0, 1, 5)  # x, y, yaw rows/columns of a 6x6 pose covariance
 
 
 @dataclass(frozen=True)
@@ -100,13 +99,6 @@ def beam_scan(msg: LaserScan, mount: Pose2D) -> BeamScan:
         raise InvalidInputError("scan angles are not finite")
     angles = msg.angle_min + msg.angle_increment * np.arange(ranges.size)
     return BeamScan(ranges, angles, float(msg.range_min), float(msg.range_max), mount)
-
-
-def covariance_3x3(msg: PoseWithCovarianceStamped) -> FloatArray:
-    full = np.asarray(msg.pose.covariance, dtype=np.float64)
-    if full.size != 36:
-        raise InvalidInputError(f"pose covariance has {full.size} values, expected 36")
-    return full.reshape(6, 6)[np.ix_(_COV_INDEX, _COV_INDEX)]
 
 
 class LocalisationNode:
@@ -258,7 +250,7 @@ class LocalisationNode:
         msg.header.stamp, msg.header.frame_id = stamp, frame
         msg.pose.pose = pose_msg(estimate.pose)
         full = np.zeros((6, 6))
-        full[np.ix_(_COV_INDEX, _COV_INDEX)] = estimate.covariance
+        full[np.ix_(COV_INDEX, COV_INDEX)] = estimate.covariance
         msg.pose.covariance = full.ravel().tolist()
         self._pose_pub.publish(msg)
         cloud = PoseArray()

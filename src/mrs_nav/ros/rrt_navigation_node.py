@@ -84,8 +84,7 @@ from mrs_nav.navigation.navigator import (
 from mrs_nav.navigation.plan_worker import run_plan
 from mrs_nav.navigation.recovery import RecoveryConfig
 from mrs_nav.ros.clock_jump import TimeJumpGuard, keep_status_timer
-from mrs_nav.ros.conversions import pose_msg
-from mrs_nav.ros.localisation_node import covariance_3x3
+from mrs_nav.ros.conversions import covariance_3x3, pose_msg
 from mrs_nav.ros.navigation_conversions import (
     goal_heading,
     grid_from_msg,
