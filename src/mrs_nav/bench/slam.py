@@ -37,7 +37,7 @@ from mrs_nav.replay.slam_replay import replay_slam
 from mrs_nav.resources import CHECKOUT, WORLDS_DIR
 from mrs_nav.sim.simulator import SimulatorConfig
 from mrs_nav.slam.config import SlamConfig
-from mrs_nav.slam.consistency import (
+from mrs_nav.slam.eval.consistency import (
     BROKEN_FRACTION,
     DUPLICATED_LINE,
     REVISIT_GAP,
@@ -45,10 +45,10 @@ from mrs_nav.slam.consistency import (
     revisit_spread,
     revisit_spread_by_distance,
 )
-from mrs_nav.slam.metrics import affine_fit, windowed_ate
-from mrs_nav.slam.relations import Relation, load_relations
+from mrs_nav.slam.eval.metrics import affine_fit, windowed_ate
+from mrs_nav.slam.eval.relations import Relation, load_relations
+from mrs_nav.slam.eval.sim_drive import OFFICE_LOOP_WAYPOINTS, OFFICE_START, drive_with_slam
 from mrs_nav.slam.scan import LaserScanData, split_beams
-from mrs_nav.slam.sim_drive import OFFICE_LOOP_WAYPOINTS, OFFICE_START, drive_with_slam
 from mrs_nav.tables import markdown_table
 
 # The shared data folder beside the checkout (or beside the folder of git worktrees).

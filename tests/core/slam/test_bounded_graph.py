@@ -6,8 +6,8 @@ from mrs_nav.geometry import Pose2D
 from mrs_nav.maps.world import load_world
 from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.sim.simulator import SimulatorConfig
-from mrs_nav.slam.consistency import BROKEN_FRACTION, doubled_wall_fraction, free_endpoint_fraction
-from mrs_nav.slam.sim_drive import drive_with_slam
+from mrs_nav.slam.eval.consistency import BROKEN_FRACTION, doubled_wall_fraction, free_endpoint_fraction
+from mrs_nav.slam.eval.sim_drive import drive_with_slam
 from mrs_nav.slam.slam import SCANS_KEPT_PER_NODE
 
 CORNERS = ((1.5, -1.5), (1.5, 1.5), (-1.5, 1.5), (-1.5, -1.5))

@@ -13,7 +13,7 @@ import pytest
 from mrs_nav.geometry import Pose2D
 from mrs_nav.slam import Slam, SlamConfig
 from mrs_nav.slam import slam as slam_module
-from mrs_nav.slam.consistency import (
+from mrs_nav.slam.eval.consistency import (
     BROKEN_FRACTION,
     DUPLICATED_LINE,
     doubled_wall_fraction,

@@ -15,8 +15,14 @@ from mrs_nav.maps.occupancy_grid import OCCUPIED, UNKNOWN
 from mrs_nav.maps.world import load_world
 from mrs_nav.sim.laser import LaserParams
 from mrs_nav.sim.simulator import SimulatorConfig
-from mrs_nav.slam.consistency import BROKEN_FRACTION, doubled_wall_fraction, free_endpoint_fraction
-from mrs_nav.slam.sim_drive import OFFICE_LOOP_WAYPOINTS, OFFICE_START, SIM_SLAM_CONFIG, DriveResult, drive_with_slam
+from mrs_nav.slam.eval.consistency import BROKEN_FRACTION, doubled_wall_fraction, free_endpoint_fraction
+from mrs_nav.slam.eval.sim_drive import (
+    OFFICE_LOOP_WAYPOINTS,
+    OFFICE_START,
+    SIM_SLAM_CONFIG,
+    DriveResult,
+    drive_with_slam,
+)
 
 OFFICE = Path(__file__).resolve().parents[3] / "worlds" / "office.world"
 DRIFTED = 0.045  # m of ATE without loop closure: the loop drifted
