@@ -118,7 +118,7 @@ class SlamReplay:
         return {
             "scans": len(self.estimate),
             "scans_skipped": self.scans_out_of_order + self.scans_rejected,
-            # left out while a pose found far from the odometry waited for the next scan (mrs_nav.slam.matcher)
+            # left out while a pose found far from the odometry waited for the next scan (mrs_nav.slam.tracking)
             "scans_in_doubt": self.slam.scans_in_doubt,
             "loops_closed": self.slam.loops_closed,
             "loops_rejected": self.slam.loops_rejected,

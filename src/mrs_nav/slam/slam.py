@@ -64,19 +64,11 @@ from mrs_nav.geometry import FloatArray, Pose2D, poses_agree
 from mrs_nav.slam.config import MAX_COORDINATE_M, MAX_MAP_CELLS, SlamConfig
 from mrs_nav.slam.grid import LogOddsGrid
 from mrs_nav.slam.local_track import LocalTrack
-from mrs_nav.slam.matcher import (
-    DistanceField,
-    MatchResult,
-    Recoveries,
-    ScanMatcher,
-    match_in_grid,
-    match_reach,
-    thin_points,
-    window_field,
-)
+from mrs_nav.slam.matcher import DistanceField, MatchResult, ScanMatcher, thin_points, window_field
 from mrs_nav.slam.place import Signature, differences, signature
 from mrs_nav.slam.posegraph import Edge, close_loop
 from mrs_nav.slam.scan import LaserScanData, StoredBeams, split_beams
+from mrs_nav.slam.tracking import Recoveries, match_in_grid, match_reach
 
 MIN_POINTS = 10  # fewer end points than this: trust odometry, the match would be noise
 MIN_SPREAD_M = 0.01  # m, floor of the odometry prediction's position spread
@@ -269,7 +261,7 @@ class Slam:
         self, odom: Pose2D, scan: LaserScanData, stamp: float, laser_pose: Pose2D | None = None
     ) -> ProcessedScan | None:
         """Process a scan taken at odometry pose ``odom`` if the gates allow; return what was done, or None when
-        the gates leave it out or its pose is in doubt (:class:`mrs_nav.slam.matcher.Recoveries`; nothing changes).
+        the gates leave it out or its pose is in doubt (:class:`mrs_nav.slam.tracking.Recoveries`; nothing changes).
 
         ``laser_pose``: base -> laser of this scan when it is not the usual mounting (a scan in another frame).
         Raises InvalidInputError, with the state unchanged, when the pose is far outside any building or the map
