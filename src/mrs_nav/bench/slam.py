@@ -119,7 +119,7 @@ def _office() -> str:
                 result.errors.ate_rmse_deg,
                 result.iou,
                 result.iou_one_cell,
-                result.slam.loops_closed,
+                result.slam.loop_closer.closed,
                 float(np.median(result.slam_ms)),
                 result.scans_per_second,
             ]

@@ -120,9 +120,9 @@ class SlamReplay:
             "scans_skipped": self.scans_out_of_order + self.scans_rejected,
             # left out while a pose found far from the odometry waited for the next scan (mrs_nav.slam.tracking)
             "scans_in_doubt": self.slam.scans_in_doubt,
-            "loops_closed": self.slam.loops_closed,
-            "loops_rejected": self.slam.loops_rejected,
-            "loops_solved": self.slam.loops_solved,
+            "loops_closed": self.slam.loop_closer.closed,
+            "loops_rejected": self.slam.loop_closer.rejected,
+            "loops_solved": self.slam.loop_closer.solved,
             "free_endpoint_fraction": free_endpoint_fraction(self.slam),
             # The broken-map lines are on the doubled walls and the places mapped twice: the free end points also
             # count moving people.
