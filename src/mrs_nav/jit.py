@@ -13,8 +13,8 @@ import importlib
 # Modules holding numba kernels, by name: importing them compiles (or loads) their kernels.
 KERNEL_MODULES: tuple[str, ...] = (
     "mrs_nav.sim.laser",
-    "mrs_nav.slam.grid",
-    "mrs_nav.slam.matcher",
+    "mrs_nav.slam.grid_kernels",
+    "mrs_nav.slam.matcher_kernels",
     "mrs_nav.trees.kernels",
 )
 

@@ -19,7 +19,7 @@ from mrs_nav.bag.messages import LASER_SCAN, ODOMETRY, _header, _pose_parts, _ti
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.sim import LaserParams, Scan
-from mrs_nav.slam.sim_drive import laser_scan_data
+from mrs_nav.slam.scan import laser_scan_data
 
 CLOCK = "rosgraph_msgs/msg/Clock"
 TWIST = "geometry_msgs/msg/Twist"

@@ -24,7 +24,9 @@ import os
 import resource
 import sys
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -37,7 +39,7 @@ from mrs_nav.replay.slam_replay import replay_slam
 from mrs_nav.resources import CHECKOUT, WORLDS_DIR
 from mrs_nav.sim.simulator import SimulatorConfig
 from mrs_nav.slam.config import SlamConfig
-from mrs_nav.slam.consistency import (
+from mrs_nav.slam.eval.consistency import (
     BROKEN_FRACTION,
     DUPLICATED_LINE,
     REVISIT_GAP,
@@ -45,10 +47,10 @@ from mrs_nav.slam.consistency import (
     revisit_spread,
     revisit_spread_by_distance,
 )
-from mrs_nav.slam.metrics import affine_fit, windowed_ate
-from mrs_nav.slam.relations import Relation, load_relations
+from mrs_nav.slam.eval.metrics import AffineFit, affine_fit, windowed_ate
+from mrs_nav.slam.eval.relations import Relation, load_relations
+from mrs_nav.slam.eval.sim_drive import OFFICE_LOOP_WAYPOINTS, OFFICE_START, drive_with_slam
 from mrs_nav.slam.scan import LaserScanData, split_beams
-from mrs_nav.slam.sim_drive import OFFICE_LOOP_WAYPOINTS, OFFICE_START, drive_with_slam
 from mrs_nav.tables import markdown_table
 
 # The shared data folder beside the checkout (or beside the folder of git worktrees).
@@ -119,7 +121,7 @@ def _office() -> str:
                 result.errors.ate_rmse_deg,
                 result.iou,
                 result.iou_one_cell,
-                result.slam.loops_closed,
+                result.slam.loop_closer.closed,
                 float(np.median(result.slam_ms)),
                 result.scans_per_second,
             ]
@@ -143,8 +145,48 @@ def _office() -> str:
     )
 
 
+@dataclass(frozen=True)
+class _IntelFigures:
+    """What the Intel replay measured: the replay's summary, its relations scores, the peak RSS (MB), ATE in
+    windows, the affine fit, the revisit spreads (m) of this trajectory and the corrected poses, the table of
+    spreads by distance, and the conversion's notes."""
+
+    summary: dict[str, Any]
+    scored: dict[str, Any]
+    peak_mb: float
+    local_ate: float
+    affine: AffineFit
+    spread: float
+    spread_reference: float
+    by_distance: str
+    notes: tuple[str, ...]
+
+
 def _intel(args: argparse.Namespace, relations: list[Relation]) -> tuple[str, tuple[float, float]]:
     """The Intel section, and the ATE against the corrected log and the end points on free cells it measured."""
+    m = _measure_intel(args, relations)
+    summary = m.summary
+    doubled, duplicated = summary["doubled_wall_fraction"], summary["duplicated_place_fraction"]
+    notes = "".join(f"- conversion note: {note}\n" for note in m.notes)
+    body = (
+        f"### Intel Research Lab log ({args.log.name}, the log's real odometry, {args.relations.name})\n\n"
+        + markdown_table(_INTEL_HEADER, [_intel_row(m)])
+        + "\n\n"
+        + _intel_verdict(m)
+        + notes
+        + m.by_distance
+    )
+    if is_broken(doubled, duplicated):
+        print(body, file=sys.stderr)
+        raise InvalidInputError(
+            f"bench slam: the Intel map is broken: {doubled:.4f} of scan end points on doubled walls "
+            f"(line {BROKEN_FRACTION}), {duplicated:.4f} of the nodes checked found elsewhere (line {DUPLICATED_LINE})"
+        )
+    return body, (float(summary["ate_rmse_m"]), summary["free_endpoint_fraction"])
+
+
+def _measure_intel(args: argparse.Namespace, relations: list[Relation]) -> _IntelFigures:
+    """Convert and replay the Intel log (:data:`INTEL_CONFIG`) and measure it against its corrected poses."""
     with tempfile.TemporaryDirectory() as tmp:
         bag = Path(tmp) / "intel.bag"
         conversion = carmen_to_bag(args.log, bag)
@@ -152,8 +194,6 @@ def _intel(args: argparse.Namespace, relations: list[Relation]) -> tuple[str, tu
     summary = result.summary()
     scored = result.relation_errors(relations)
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-    free, doubled = summary["free_endpoint_fraction"], summary["doubled_wall_fraction"]
-    duplicated = summary["duplicated_place_fraction"]
     paired, reference = result.truth_pairs()
     local_ate = windowed_ate(paired, reference, window=ATE_WINDOW)
     affine = affine_fit(paired, reference)
@@ -167,52 +207,68 @@ def _intel(args: argparse.Namespace, relations: list[Relation]) -> tuple[str, tu
     # The log's poses (reference) are the laser's: the conversion mounts the laser at the base.
     spread, spread_reference = revisit_spread(mine, points), revisit_spread(reference, points)
     by_distance = _spread_by_distance(mine, reference, points)
-    rows: list[list[object]] = [
-        [
-            summary["scans"],
-            f"{scored['relations_trans_mean_m']:.4f} +- {scored['relations_trans_std_m']:.4f}",
-            f"{scored['relations_rot_mean_deg']:.3f} +- {scored['relations_rot_std_deg']:.3f}",
-            scored["relations_reference_trans_mean_m"],
-            summary["ate_rmse_m"],
-            local_ate,
-            affine.residual_rms_m,
-            f"{affine.stretch_min:.4f} / {affine.stretch_max:.4f}",
-            spread * 1000.0,
-            spread_reference * 1000.0,
-            free,
-            doubled,
-            summary["loops_closed"],
-            summary["loops_solved"],
-            summary["loops_rejected"],
-            summary["ms_per_scan_median"],
-            summary["ms_per_scan_p95"],
-            summary["realtime_factor"],
-            peak_mb,
-        ]
+    return _IntelFigures(
+        summary, scored, peak_mb, local_ate, affine, spread, spread_reference, by_distance, tuple(conversion.notes)
+    )
+
+
+_INTEL_HEADER = [
+    "scans",
+    "relations trans [m]",
+    "relations rot [deg]",
+    "floor: corrected poses, same bridging [m]",
+    "ATE vs corrected log [m]",
+    f"same, {ATE_WINDOW}-scan windows, median [m]",
+    "same, after an affine fit [m]",
+    "the fit's stretches",
+    f"revisit spread [mm] (scans >= {REVISIT_GAP} apart)",
+    "same, corrected poses [mm]",
+    "end points on free cells",
+    "on doubled walls",
+    "loops closed",
+    "of them moved the graph",
+    "loops rejected",
+    "CPU ms/scan median",
+    "CPU ms/scan p95",
+    "x real time (CPU)",
+    "peak RSS [MB]",
+]
+
+
+def _intel_row(m: _IntelFigures) -> list[object]:
+    """The Intel table's row (:data:`_INTEL_HEADER`)."""
+    summary, scored = m.summary, m.scored
+    return [
+        summary["scans"],
+        f"{scored['relations_trans_mean_m']:.4f} +- {scored['relations_trans_std_m']:.4f}",
+        f"{scored['relations_rot_mean_deg']:.3f} +- {scored['relations_rot_std_deg']:.3f}",
+        scored["relations_reference_trans_mean_m"],
+        summary["ate_rmse_m"],
+        m.local_ate,
+        m.affine.residual_rms_m,
+        f"{m.affine.stretch_min:.4f} / {m.affine.stretch_max:.4f}",
+        m.spread * 1000.0,
+        m.spread_reference * 1000.0,
+        summary["free_endpoint_fraction"],
+        summary["doubled_wall_fraction"],
+        summary["loops_closed"],
+        summary["loops_solved"],
+        summary["loops_rejected"],
+        summary["ms_per_scan_median"],
+        summary["ms_per_scan_p95"],
+        summary["realtime_factor"],
+        m.peak_mb,
     ]
-    header = [
-        "scans",
-        "relations trans [m]",
-        "relations rot [deg]",
-        "floor: corrected poses, same bridging [m]",
-        "ATE vs corrected log [m]",
-        f"same, {ATE_WINDOW}-scan windows, median [m]",
-        "same, after an affine fit [m]",
-        "the fit's stretches",
-        f"revisit spread [mm] (scans >= {REVISIT_GAP} apart)",
-        "same, corrected poses [mm]",
-        "end points on free cells",
-        "on doubled walls",
-        "loops closed",
-        "of them moved the graph",
-        "loops rejected",
-        "CPU ms/scan median",
-        "CPU ms/scan p95",
-        "x real time (CPU)",
-        "peak RSS [MB]",
-    ]
+
+
+def _intel_verdict(m: _IntelFigures) -> str:
+    """The Intel section's verdict lines: accuracy, agreement with the corrected log, closures, consistency, cost."""
+    summary, scored, affine = m.summary, m.scored, m.affine
+    free, doubled = summary["free_endpoint_fraction"], summary["doubled_wall_fraction"]
+    duplicated = summary["duplicated_place_fraction"]
     trans = scored["relations_trans_mean_m"]
-    verdict = (
+    spread, spread_reference, peak_mb = m.spread, m.spread_reference, m.peak_mb
+    return (
         f"- relations translational error {trans:.4f} m (mean over {scored['relations_scored']} relations) beside "
         f"the published gmapping {GMAPPING_M} m and Cartographer {CARTOGRAPHER_M} m (same metric, same relations "
         f"file); target <= {GMAPPING_M} m: {'PASS' if trans <= GMAPPING_M else 'FAIL'}. The corrected poses "
@@ -222,7 +278,7 @@ def _intel(args: argparse.Namespace, relations: list[Relation]) -> tuple[str, tu
         f"(the corrected log), target <= {ATE_TARGET_M} m: "
         f"{'PASS' if summary['ate_rmse_m'] <= ATE_TARGET_M else 'FAIL'}. RPE between consecutive scans against the "
         "corrected log measures the same agreement, locally; it does not see a loop that failed to close. Aligned in "
-        f"windows of {ATE_WINDOW} consecutive scans the two trajectories agree to {local_ate:.3f} m (median): "
+        f"windows of {ATE_WINDOW} consecutive scans the two trajectories agree to {m.local_ate:.3f} m (median): "
         "the rest of the ATE is the building's global shape differing between two SLAM outputs, of which the "
         f"corrected log scores {scored['relations_reference_trans_mean_m']:.4f} m on the relations and this "
         f"trajectory {trans:.4f} m. The best affine map of this trajectory onto the corrected one leaves "
@@ -246,22 +302,6 @@ def _intel(args: argparse.Namespace, relations: list[Relation]) -> tuple[str, tu
         f"- peak RSS of the bench process {peak_mb:.0f} MB, target <= {MEMORY_TARGET_MB:.0f} MB: "
         f"{'PASS' if peak_mb <= MEMORY_TARGET_MB else 'FAIL'}\n"
     )
-    notes = "".join(f"- conversion note: {note}\n" for note in conversion.notes)
-    body = (
-        f"### Intel Research Lab log ({args.log.name}, the log's real odometry, {args.relations.name})\n\n"
-        + markdown_table(header, rows)
-        + "\n\n"
-        + verdict
-        + notes
-        + by_distance
-    )
-    if is_broken(doubled, duplicated):
-        print(body, file=sys.stderr)
-        raise InvalidInputError(
-            f"bench slam: the Intel map is broken: {doubled:.4f} of scan end points on doubled walls "
-            f"(line {BROKEN_FRACTION}), {duplicated:.4f} of the nodes checked found elsewhere (line {DUPLICATED_LINE})"
-        )
-    return body, (float(summary["ate_rmse_m"]), free)
 
 
 def _spread_by_distance(mine: list[Pose2D], reference: list[Pose2D], points: list[FloatArray]) -> str:

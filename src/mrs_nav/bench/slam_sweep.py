@@ -26,7 +26,7 @@ from mrs_nav.limits import MAX_RUNS
 from mrs_nav.options import runs_option
 from mrs_nav.replay.batch import BagJob, BagOutcome, run_jobs
 from mrs_nav.slam.config import SlamConfig
-from mrs_nav.slam.consistency import BROKEN_FRACTION, DUPLICATED_LINE, is_broken
+from mrs_nav.slam.eval.consistency import BROKEN_FRACTION, DUPLICATED_LINE, is_broken
 from mrs_nav.tables import markdown_table
 
 # Corrected logs hold only the scans their SLAM selected: process every one (as `bench slam` does).

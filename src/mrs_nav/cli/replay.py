@@ -27,8 +27,8 @@ from mrs_nav.replay.batch import (
 )
 from mrs_nav.replay.golden import dump_json, make_golden
 from mrs_nav.replay.job_options import add_options, golden_job, job_from_args
-from mrs_nav.slam.consistency import BROKEN_FRACTION, DUPLICATED_LINE
-from mrs_nav.slam.relations import load_relations
+from mrs_nav.slam.eval.consistency import BROKEN_FRACTION, DUPLICATED_LINE
+from mrs_nav.slam.eval.relations import load_relations
 from mrs_nav.textfiles import check_writable
 
 

@@ -36,7 +36,7 @@ from mrs_nav.replay.session_replay import (
 )
 from mrs_nav.replay.slam_replay import SlamReplay, output_paths, truth_scans, write_outputs
 from mrs_nav.slam.config import MAX_COORDINATE_M, SlamConfig
-from mrs_nav.slam.consistency import doubled_wall_fraction_at
+from mrs_nav.slam.eval.consistency import doubled_wall_fraction_at
 from mrs_nav.tables import markdown_table
 
 GOLDEN_SUFFIX = ".golden.json"

@@ -32,14 +32,14 @@ from mrs_nav.maps.map_io import save_map
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.replay.pose_track import PoseTrack
 from mrs_nav.slam.config import MAX_COORDINATE_M, SlamConfig
-from mrs_nav.slam.consistency import (
+from mrs_nav.slam.eval.consistency import (
     doubled_wall_fraction,
     duplicated_place_fraction,
     free_endpoint_fraction,
     is_broken,
 )
-from mrs_nav.slam.metrics import TrajectoryErrors, align_se2, trajectory_errors
-from mrs_nav.slam.relations import Relation, relation_errors
+from mrs_nav.slam.eval.metrics import TrajectoryErrors, align_se2, trajectory_errors
+from mrs_nav.slam.eval.relations import Relation, relation_errors
 from mrs_nav.slam.scan import BeamSplit, split_beams
 from mrs_nav.slam.slam import Slam
 
@@ -98,7 +98,7 @@ class SlamReplay:
         self.first_rejection = self.first_rejection or reason
 
     def relation_errors(self, relations: list[Relation], offset: float | None = None) -> dict[str, Any]:
-        """The relations metric (:mod:`mrs_nav.slam.relations`) of the SLAM trajectory, and of the bag's ground
+        """The relations metric (:mod:`mrs_nav.slam.eval.relations`) of the SLAM trajectory, and of the bag's ground
         truth bridged the same way (``relations_reference_*``: the floor the bridging leaves) when it has one."""
         stamps = self.stamps
         estimate = [p.pose for p in self.slam.processed]
@@ -119,11 +119,11 @@ class SlamReplay:
         return {
             "scans": len(self.estimate),
             "scans_skipped": self.scans_out_of_order + self.scans_rejected,
-            # left out while a pose found far from the odometry waited for the next scan (mrs_nav.slam.matcher)
+            # left out while a pose found far from the odometry waited for the next scan (mrs_nav.slam.tracking)
             "scans_in_doubt": self.slam.scans_in_doubt,
-            "loops_closed": self.slam.loops_closed,
-            "loops_rejected": self.slam.loops_rejected,
-            "loops_solved": self.slam.loops_solved,
+            "loops_closed": self.slam.loop_closer.closed,
+            "loops_rejected": self.slam.loop_closer.rejected,
+            "loops_solved": self.slam.loop_closer.solved,
             "free_endpoint_fraction": free_endpoint_fraction(self.slam),
             # The broken-map lines are on the doubled walls and the places mapped twice: the free end points also
             # count moving people.
@@ -212,7 +212,7 @@ def replay_slam(bag: Path, config: SlamConfig, progress: Callable[[int], None] |
 
 def truth_scans(bag: Path, result: SlamReplay) -> Callable[[], Iterator[tuple[Pose2D, BeamSplit]]] | None:
     """The scans ``result`` processed, read from ``bag`` again, each at its ground-truth laser pose and with its
-    beams split as the SLAM split them (for :func:`mrs_nav.slam.consistency.doubled_wall_fraction_at`); None
+    beams split as the SLAM split them (for :func:`mrs_nav.slam.eval.consistency.doubled_wall_fraction_at`); None
     without truth for most of them (:attr:`SlamReplay.has_truth`)."""
     if not result.has_truth:
         return None

@@ -24,8 +24,9 @@ import math
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.slam.config import MAX_MAP_CELLS, SlamConfig
 from mrs_nav.slam.grid import LogOddsGrid
-from mrs_nav.slam.matcher import ScanMatcher, match_in_grid
+from mrs_nav.slam.matcher import ScanMatcher
 from mrs_nav.slam.scan import BeamSplit
+from mrs_nav.slam.tracking import match_in_grid
 
 SUBMAP_M = 10.0  # m of travel a full submap spans (the matched one spans between half of this and all of it)
 SUBMAP_MAX_SCANS = 200  # scans a full submap holds at most

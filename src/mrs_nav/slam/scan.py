@@ -10,12 +10,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray
+
+if TYPE_CHECKING:  # only its fields are read: the simulator's kernels are not loaded with the SLAM's
+    from mrs_nav.sim.laser import Scan
 
 MAX_BEAMS = 100_000  # beams per scan; 2-D lasers give at most a few thousand
 
@@ -150,3 +154,9 @@ def split_beams(scan: LaserScanData, max_usable: float, max_range: float = 0.0) 
         free_angles=a[free],
         free_ranges=np.full(int(free.sum()), usable, dtype=np.float64),
     )
+
+
+def laser_scan_data(scan: Scan) -> LaserScanData:
+    """The SLAM core's view of a simulated scan."""
+    p = scan.params
+    return LaserScanData(p.angle_min, p.angle_increment, p.range_min, p.range_max, scan.ranges)

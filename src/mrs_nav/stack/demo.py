@@ -39,8 +39,8 @@ from mrs_nav.maps.world import World
 from mrs_nav.navigation.navigator import GoalState, NavEvent, Navigator, NavigatorConfig, rrt_planner
 from mrs_nav.sim import Scan, Simulator, SimulatorConfig
 from mrs_nav.slam import Slam, SlamConfig
-from mrs_nav.slam.evaluation import map_iou
-from mrs_nav.slam.sim_drive import laser_scan_data
+from mrs_nav.slam.eval.map_iou import map_iou
+from mrs_nav.slam.scan import laser_scan_data
 from mrs_nav.stack.track import BoundedTrack
 
 matplotlib.use("Agg")  # headless: figures are files, never windows

@@ -12,7 +12,7 @@ import pytest
 from mrs_nav.bag.io import BagWriter, read_messages
 from mrs_nav.bag.messages import LASER_SCAN, ODOMETRY, laser_scan_message, odometry_message
 from mrs_nav.cli.main import main
-from mrs_nav.slam.consistency import BROKEN_FRACTION, DUPLICATED_LINE
+from mrs_nav.slam.eval.consistency import BROKEN_FRACTION, DUPLICATED_LINE
 from tests.core.bag.carmen_fixture import drive, log_lines, write_log
 from tests.core.slam.synthetic import ROOM, ROOM_WITH_DOOR, cast, far_drive, person
 

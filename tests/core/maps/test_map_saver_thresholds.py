@@ -12,7 +12,7 @@ from mrs_nav.geometry import Pose2D
 from mrs_nav.maps.map_io import load_map, save_map
 from mrs_nav.maps.occupancy_grid import OCCUPIED, UNKNOWN, OccupancyGrid
 from mrs_nav.maps.world import load_world
-from mrs_nav.slam.sim_drive import drive_with_slam
+from mrs_nav.slam.eval.sim_drive import drive_with_slam
 from tests.conftest import WORLDS
 
 

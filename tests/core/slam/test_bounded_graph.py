@@ -6,9 +6,9 @@ from mrs_nav.geometry import Pose2D
 from mrs_nav.maps.world import load_world
 from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.sim.simulator import SimulatorConfig
-from mrs_nav.slam.consistency import BROKEN_FRACTION, doubled_wall_fraction, free_endpoint_fraction
-from mrs_nav.slam.sim_drive import drive_with_slam
-from mrs_nav.slam.slam import SCANS_KEPT_PER_NODE
+from mrs_nav.slam.eval.consistency import BROKEN_FRACTION, doubled_wall_fraction, free_endpoint_fraction
+from mrs_nav.slam.eval.sim_drive import drive_with_slam
+from mrs_nav.slam.keyframes import KeyframeConfig
 
 CORNERS = ((1.5, -1.5), (1.5, 1.5), (-1.5, 1.5), (-1.5, -1.5))
 LAP_M = 12.0  # m, once round the four corners
@@ -32,7 +32,7 @@ def test_eight_laps_of_the_arena_keep_the_graph_bounded_and_the_map_right() -> N
     assert len(slam.nodes) <= after_two + 5
     assert len(slam.processed) >= 3 * len(slam.nodes)  # most scans were matched and mapped, not made nodes
     # and of those, a bounded number per node is kept for rebuilding the map
-    assert slam.stored_scans <= (1 + SCANS_KEPT_PER_NODE) * len(slam.nodes) < len(slam.processed)
+    assert slam.stored_scans <= (1 + KeyframeConfig().scans_kept_per_node) * len(slam.nodes) < len(slam.processed)
     assert result.iou >= 0.9
     assert doubled_wall_fraction(slam) < BROKEN_FRACTION
     assert free_endpoint_fraction(slam) < 0.05  # nothing moves here: every stray end point is the map's

@@ -14,14 +14,12 @@ from scipy import ndimage
 
 from mrs_nav.geometry import Pose2D, wrap_angle
 from mrs_nav.slam.grid import LogOddsGrid
-from mrs_nav.slam.matcher import (
-    COARSE,
+from mrs_nav.slam.matcher import COARSE, DistanceField, ScanMatcher
+from mrs_nav.slam.matcher_kernels import (
     INDEPENDENT_POINTS,
     NORMAL_RADIUS,
     POINT_SIGMA_CELLS,
     PRIOR_WEIGHT,
-    DistanceField,
-    ScanMatcher,
     _likelihoods,
 )
 from mrs_nav.slam.scan import BeamSplit, LaserScanData, split_beams

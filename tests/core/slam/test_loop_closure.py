@@ -13,7 +13,7 @@ import pytest
 from mrs_nav.geometry import Pose2D
 from mrs_nav.slam import Slam, SlamConfig
 from mrs_nav.slam import slam as slam_module
-from mrs_nav.slam.consistency import (
+from mrs_nav.slam.eval.consistency import (
     BROKEN_FRACTION,
     DUPLICATED_LINE,
     doubled_wall_fraction,
@@ -21,9 +21,10 @@ from mrs_nav.slam.consistency import (
     free_endpoint_fraction,
 )
 from mrs_nav.slam.grid import LogOddsGrid
+from mrs_nav.slam.loop_closure import LoopConfig, ambiguous_loop_match
 from mrs_nav.slam.matcher import DistanceField, ScanMatcher, thin_points, window_field
 from mrs_nav.slam.scan import BeamSplit, split_beams
-from mrs_nav.slam.slam import LOOP_SEARCH_M, LOOP_SEARCH_RAD, REDRAW_MARGIN_M, ambiguous_loop_match
+from mrs_nav.slam.slam import REDRAW_MARGIN_M
 from tests.core.slam.synthetic import ROOM, ROOM_WITH_DOOR, cast, far_drive
 
 
@@ -83,7 +84,7 @@ def run(loop_closure, seed=0, scale=1.03):
 def test_loops_close_with_right_edges_only():
     slam, truth = run(True)
     loops = [e for e in slam.edges if e.j != e.i + 1]
-    assert len(loops) == slam.loops_closed >= 1
+    assert len(loops) == slam.loop_closer.closed >= 1
     # Edges join graph nodes (keyframes); a node's stamp is the index of its pose in the drive.
     truth_of = [truth[round(node.stamp)] for node in slam.nodes]
     for edge in loops:
@@ -124,27 +125,27 @@ def submap_and_scan(walls: np.ndarray, mapped_from: list[Pose2D], laser: Pose2D)
     for pose in mapped_from:
         grid.integrate(pose, beams(pose))
     points = thin_points(beams(laser).hit_points, config.delta)
-    return window_field(grid, points, laser, LOOP_SEARCH_M), points
+    return window_field(grid, points, laser, LoopConfig().search_m), points
 
 
 def test_a_loop_match_on_a_look_alike_place_is_ambiguous():
     here = Pose2D(0.0, 0.0, 0.0)
     field, points = submap_and_scan(DOORS, [Pose2D(x, 0.0, 0.0) for x in np.arange(-6.0, 6.5, 0.5)], here)
-    matcher = ScanMatcher(SlamConfig().sigma, LOOP_SEARCH_M, LOOP_SEARCH_RAD)
+    matcher = ScanMatcher(SlamConfig().sigma, LoopConfig().search_m, LoopConfig().search_rad)
     twin = matcher.evaluate(field, points, Pose2D(1.0, 0.0, 0.0))  # one door on: the scan fits as well there
     assert twin.inlier_fraction > 0.9
-    assert ambiguous_loop_match(matcher, field, points, twin, here)
+    assert ambiguous_loop_match(matcher, field, points, twin, here, LoopConfig())
 
 
 def test_a_loop_match_that_fits_clearly_better_than_the_graph_is_not_ambiguous():
     truth = Pose2D(-1.0, 0.5, 0.2)
     field, points = submap_and_scan(ROOM, [Pose2D(-3.0, 0.0, 0.0), Pose2D(3.0, 0.0, 0.0), truth], truth)
-    matcher = ScanMatcher(SlamConfig().sigma, LOOP_SEARCH_M, LOOP_SEARCH_RAD)
+    matcher = ScanMatcher(SlamConfig().sigma, LoopConfig().search_m, LoopConfig().search_rad)
     match = matcher.evaluate(field, points, truth)
     # The graph 0.6 m off (the drift a loop closure corrects): the scan fits badly there.
-    assert not ambiguous_loop_match(matcher, field, points, match, Pose2D(-0.4, 0.6, 0.25))
+    assert not ambiguous_loop_match(matcher, field, points, match, Pose2D(-0.4, 0.6, 0.25), LoopConfig())
     # The graph 0.15 m off: refining from there slides onto the match, the same place.
-    assert not ambiguous_loop_match(matcher, field, points, match, Pose2D(-0.88, 0.42, 0.22))
+    assert not ambiguous_loop_match(matcher, field, points, match, Pose2D(-0.88, 0.42, 0.22), LoopConfig())
 
 
 @pytest.mark.parametrize("margin", [0.0, REDRAW_MARGIN_M])
@@ -195,16 +196,16 @@ def test_a_map_rebuilt_lazily_is_the_map_rebuilt_at_once(monkeypatch, margin):
         np.testing.assert_array_equal(lazy, eager)
 
 
-def run_far_drive() -> tuple[Slam, list[Pose2D]]:
+def run_far_drive(loops: LoopConfig | None = None) -> tuple[Slam, list[Pose2D]]:
     truth, odom = far_drive()
-    slam = Slam(SlamConfig(linearUpdate=0.0, angularUpdate=0.0, loop_closure=True))
+    slam = Slam(SlamConfig(linearUpdate=0.0, angularUpdate=0.0, loop_closure=True), loops=loops)
     for i, (gt, od) in enumerate(zip(truth, odom, strict=True)):
         slam.add_scan(od, cast(gt, walls=ROOM_WITH_DOOR), float(i))
     slam.finish()
     return slam, truth
 
 
-def test_a_loop_after_a_drift_beyond_the_near_search_is_closed_by_place(monkeypatch):
+def test_a_loop_after_a_drift_beyond_the_near_search_is_closed_by_place():
     # Back in the room the estimate is 4 m and 14 degrees off: no older node lies within the near search's reach of
     # where the scan fits. Its place signature picks a node of the room's first visit; matched round that node,
     # and again one metre on asking for the same correction, the loop closes.
@@ -228,8 +229,7 @@ def test_a_loop_after_a_drift_beyond_the_near_search_is_closed_by_place(monkeypa
     assert duplicated_place_fraction(slam) == 0.0
 
     # Without the search by place the loop stays open, and the room is mapped twice.
-    monkeypatch.setattr(slam_module, "LOOP_FAR_AFTER_M", math.inf)
-    open_slam, _ = run_far_drive()
+    open_slam, _ = run_far_drive(LoopConfig(far_after_m=math.inf))
     assert min(errors(open_slam, truth, last=80)) > 3.0
     assert free_endpoint_fraction(open_slam) > 0.05
     # The second room lies where the first never reached: few of its end points land on the first's free cells,
@@ -238,11 +238,10 @@ def test_a_loop_after_a_drift_beyond_the_near_search_is_closed_by_place(monkeypa
     assert duplicated_place_fraction(open_slam) > DUPLICATED_LINE
 
 
-def test_a_far_loop_match_is_taken_only_when_the_next_one_asks_for_the_same_correction(monkeypatch):
+def test_a_far_loop_match_is_taken_only_when_the_next_one_asks_for_the_same_correction():
     # A signature can pick a look-alike place, and a scan can fit there; a wrong place seldom fits twice in a row
     # with the same correction of the estimate. With agreement asked to the micrometre, none is taken.
-    monkeypatch.setattr(slam_module, "LOOP_FAR_AGREES", (1e-6, 1e-6))
-    slam, truth = run_far_drive()
+    slam, truth = run_far_drive(LoopConfig(far_agrees=(1e-6, 1e-6)))
     assert (
         min(
             math.hypot(r.pose.x - truth[round(r.stamp)].x, r.pose.y - truth[round(r.stamp)].y)

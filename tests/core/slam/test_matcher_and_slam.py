@@ -9,9 +9,10 @@ from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.motion_model import OdometryNoise, noisy_odometry
 from mrs_nav.slam import LaserScanData, Slam, SlamConfig
-from mrs_nav.slam.matcher import Recoveries, match_in_grid, thin_points
-from mrs_nav.slam.metrics import trajectory_errors
+from mrs_nav.slam.eval.metrics import trajectory_errors
+from mrs_nav.slam.matcher import thin_points
 from mrs_nav.slam.scan import split_beams
+from mrs_nav.slam.tracking import Recoveries, match_in_grid
 
 from .synthetic import cast
 

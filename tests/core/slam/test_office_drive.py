@@ -8,7 +8,7 @@ import pytest
 
 from mrs_nav.maps.world import load_world
 from mrs_nav.sim.simulator import SimulatorConfig
-from mrs_nav.slam.sim_drive import OFFICE_START, OFFICE_WAYPOINTS, DriveResult, drive_with_slam
+from mrs_nav.slam.eval.sim_drive import OFFICE_START, OFFICE_WAYPOINTS, DriveResult, drive_with_slam
 
 OFFICE = Path(__file__).resolve().parents[3] / "worlds" / "office.world"
 

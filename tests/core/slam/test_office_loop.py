@@ -15,8 +15,14 @@ from mrs_nav.maps.occupancy_grid import OCCUPIED, UNKNOWN
 from mrs_nav.maps.world import load_world
 from mrs_nav.sim.laser import LaserParams
 from mrs_nav.sim.simulator import SimulatorConfig
-from mrs_nav.slam.consistency import BROKEN_FRACTION, doubled_wall_fraction, free_endpoint_fraction
-from mrs_nav.slam.sim_drive import OFFICE_LOOP_WAYPOINTS, OFFICE_START, SIM_SLAM_CONFIG, DriveResult, drive_with_slam
+from mrs_nav.slam.eval.consistency import BROKEN_FRACTION, doubled_wall_fraction, free_endpoint_fraction
+from mrs_nav.slam.eval.sim_drive import (
+    OFFICE_LOOP_WAYPOINTS,
+    OFFICE_START,
+    SIM_SLAM_CONFIG,
+    DriveResult,
+    drive_with_slam,
+)
 
 OFFICE = Path(__file__).resolve().parents[3] / "worlds" / "office.world"
 DRIFTED = 0.045  # m of ATE without loop closure: the loop drifted
@@ -31,7 +37,7 @@ def test_the_office_loop_closes_within_1_cm() -> None:
     # The simulator's defaults: 1 cm laser range noise, here with 1 % wheel odometry noise.
     result = loop(SimulatorConfig(odom_noise=0.01, seed=1), loop_closure=True)
     assert result.slam.processed[-1].travelled >= 45.0
-    assert result.slam.loops_closed >= 1
+    assert result.slam.loop_closer.closed >= 1
     assert result.errors.ate_rmse_m <= 0.01  # 3.3 mm measured
     assert doubled_wall_fraction(result.slam) < BROKEN_FRACTION
     assert free_endpoint_fraction(result.slam) < 0.05  # nothing moves here: every stray end point is the map's
@@ -48,14 +54,14 @@ def test_closing_the_loop_makes_a_drifted_map_consistent_and_leaves_the_others_a
         sim = SimulatorConfig(odom_noise=0.05, seed=seed, laser=LaserParams(noise_sigma=0.05))
         before = loop(sim, loop_closure=False)
         after = loop(sim, loop_closure=True)
-        assert after.slam.loops_closed >= 1
-        assert after.slam.loops_rejected == 0
+        assert after.slam.loop_closer.closed >= 1
+        assert after.slam.loop_closer.rejected == 0
         stray_before, stray_after = free_endpoint_fraction(before.slam), free_endpoint_fraction(after.slam)
         assert after.errors.ate_rmse_m <= before.errors.ate_rmse_m + 0.005
         assert stray_after <= stray_before + 0.001
         if before.errors.ate_rmse_m >= DRIFTED:
             drifted.append(seed)
-            assert after.slam.loops_solved >= 1  # the drift went into the graph, not into one step
+            assert after.slam.loop_closer.solved >= 1  # the drift went into the graph, not into one step
             assert after.errors.ate_rmse_m <= 0.5 * before.errors.ate_rmse_m
             assert after.errors.ate_rmse_m <= 0.03
             assert stray_after < stray_before

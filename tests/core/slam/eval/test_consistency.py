@@ -11,7 +11,7 @@ import pytest
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.slam import Slam, SlamConfig
-from mrs_nav.slam.consistency import (
+from mrs_nav.slam.eval.consistency import (
     BROKEN_FRACTION,
     REVISIT_GAP,
     doubled_wall_fraction,

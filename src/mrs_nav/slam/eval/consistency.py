@@ -25,9 +25,9 @@ is the line ``mrs-nav replay`` warns at and ``mrs-nav bench slam`` fails at.
 second copy lies in space the first never saw (a room re-entered after a drift, drawn again beside itself, turned;
 a corridor bent where its loop did not close). Every :data:`DUPLICATE_EVERY_M` of travel a node's scan is looked
 for by place signature among the nodes at least :data:`DUPLICATE_APART_M` of travel from it and matched there as a
-far loop closure is (:meth:`mrs_nav.slam.slam.Slam.match_at_node`); where it fits, twice in a row with the same
-correction, more than :data:`DUPLICATE_OFF` from where the map has it, the place is in the map twice. The share of
-checked nodes so is held to :data:`DUPLICATED_LINE`.
+far loop closure is (:meth:`mrs_nav.slam.loop_closure.LoopCloser.match_at_node`); where it fits, twice in a row
+with the same correction, more than :data:`DUPLICATE_OFF` from where the map has it, the place is in the map twice.
+The share of checked nodes so is held to :data:`DUPLICATED_LINE`.
 
 :func:`revisit_spread` is a finer figure for comparing trajectories of the same scans (this SLAM's against a
 reference's): how closely end points of scans taken far apart in time agree; :func:`revisit_spread_by_distance`
@@ -50,7 +50,7 @@ from mrs_nav.slam.grid import LogOddsGrid
 from mrs_nav.slam.matcher import thin_points
 from mrs_nav.slam.place import differences
 from mrs_nav.slam.scan import BeamSplit
-from mrs_nav.slam.slam import LOOP_FAR_AGREES, LOOP_MIN_POINTS, Slam, new_map
+from mrs_nav.slam.slam import Slam, new_map
 
 # Of the end points on doubled walls (doubled_wall_fraction): 3.5x the most any map that holds reached on 13 public
 # logs (0.0014), below the least broken one (Orebro's, 0.011, before the matcher's wider search for weak matches).
@@ -105,12 +105,12 @@ def is_broken(doubled: float, duplicated: float) -> bool:
 def duplicated_place_fraction(slam: Slam) -> float:
     """The share of the nodes checked whose place the map holds twice (module doc), at the final poses; 0 without
     nodes to check."""
-    nodes = slam.nodes
-    signed = [j for j in range(len(nodes)) if slam.signature_of(j) is not None]
+    nodes, loops = slam.nodes, slam.loop_closer
+    signed = [j for j in range(len(nodes)) if loops.signature_of(nodes, j) is not None]
     if not signed:
         return 0.0
     travel = np.array([nodes[j].travelled for j in signed])
-    signatures = np.array([slam.signature_of(j) for j in signed])
+    signatures = np.array([loops.signature_of(nodes, j) for j in signed])
     checked = duplicated = 0
     last = -math.inf
     pending: Pose2D | None = None
@@ -119,7 +119,7 @@ def duplicated_place_fraction(slam: Slam) -> float:
         if record.travelled - last < DUPLICATE_EVERY_M or record.beams is None:
             continue
         points = thin_points(record.beams.split().hit_points, slam.config.delta)
-        if points.shape[0] < LOOP_MIN_POINTS:
+        if points.shape[0] < loops.config.min_points:
             continue
         last = record.travelled
         checked += 1
@@ -128,11 +128,11 @@ def duplicated_place_fraction(slam: Slam) -> float:
         match = None
         if apart.size:
             j = signed[int(apart[np.argmin(differences(signatures[k], signatures[apart]))])]
-            match = slam.match_at_node(j, [signed[a] for a in apart], points, estimate.yaw)
+            match = loops.match_at_node(nodes, j, [signed[a] for a in apart], points, estimate.yaw)
         if match is None:
             pending = None
             continue
-        confirmed = pending is not None and poses_agree(pending.compose(estimate), match.pose, LOOP_FAR_AGREES)
+        confirmed = pending is not None and poses_agree(pending.compose(estimate), match.pose, loops.config.far_agrees)
         pending = match.pose.compose(estimate.inverse())
         duplicated += confirmed and not poses_agree(match.pose, estimate, DUPLICATE_OFF)
     return duplicated / checked if checked else 0.0

@@ -6,7 +6,7 @@ from hypothesis import strategies as st
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
-from mrs_nav.slam.metrics import affine_fit, trajectory_errors, windowed_ate
+from mrs_nav.slam.eval.metrics import affine_fit, trajectory_errors, windowed_ate
 
 TRUTH = [Pose2D(0.1 * i, 0.05 * i * i, 0.1 * i) for i in range(20)]
 

@@ -9,7 +9,7 @@ from mrs_nav.cli.main import main
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.replay.pose_track import PoseTrack
-from mrs_nav.slam.relations import Relation, find_offset, load_relations, relation_errors
+from mrs_nav.slam.eval.relations import Relation, find_offset, load_relations, relation_errors
 from tests.core.bag.carmen_fixture import drive, log_lines, write_log
 
 OFFSET = 976052857.337

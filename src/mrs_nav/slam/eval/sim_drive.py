@@ -17,12 +17,11 @@ import numpy as np
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D, wrap_angle
 from mrs_nav.maps.world import World
-from mrs_nav.sim.laser import Scan
 from mrs_nav.sim.simulator import Simulator, SimulatorConfig
 from mrs_nav.slam.config import SlamConfig
-from mrs_nav.slam.evaluation import map_iou
-from mrs_nav.slam.metrics import TrajectoryErrors, align_se2, trajectory_errors
-from mrs_nav.slam.scan import LaserScanData
+from mrs_nav.slam.eval.map_iou import map_iou
+from mrs_nav.slam.eval.metrics import TrajectoryErrors, align_se2, trajectory_errors
+from mrs_nav.slam.scan import laser_scan_data
 from mrs_nav.slam.slam import Slam
 
 OFFICE_START = Pose2D(-5.0, -5.0, 0.0)
@@ -38,12 +37,6 @@ SIM_SLAM_CONFIG = SlamConfig(maxUrange=3.0, srr=0.02, srt=0.05, str=0.02, stt=0.
 
 COMMAND_PERIOD = 0.1  # s between driver commands
 REACHED = 0.15  # m: a waypoint counts as reached within this distance
-
-
-def laser_scan_data(scan: Scan) -> LaserScanData:
-    """The SLAM core's view of a simulated scan."""
-    p = scan.params
-    return LaserScanData(p.angle_min, p.angle_increment, p.range_min, p.range_max, scan.ranges)
 
 
 @dataclass(frozen=True)
