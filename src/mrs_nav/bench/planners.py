@@ -39,6 +39,7 @@ from mrs_nav.trees import arcs
 from mrs_nav.trees.rrt import RRTConfig, grow_rrt
 from mrs_nav.trees.rrt_star import RRTStarConfig, grow_rrt_star
 from mrs_nav.trees.scenarios import COURSE_GOAL, COURSE_START, OFFICE_GOALS, OFFICE_START, building_grid, course_grid
+from mrs_nav.trees.tree import NoPathInTreeError, Search
 
 ARENA_START = COURSE_START
 ARENA_GOAL = COURSE_GOAL
@@ -97,19 +98,48 @@ class Run:
     iterations: int
 
 
+@dataclass(frozen=True)
+class Attempt:
+    """One tree search as the benchmarks count it: the search when it found a path (else None) and what it
+    spent either way."""
+
+    search: Search | None
+    iterations: int
+    nodes: int
+
+    @property
+    def first_s(self) -> float:
+        """CPU seconds to the first path; inf when there was none."""
+        return self.search.result.first_solution_s or math.inf if self.search is not None else math.inf
+
+    @property
+    def length(self) -> float:
+        """Length (m) of the path found; 0 when there was none."""
+        return self.search.result.length_m if self.search is not None else 0.0
+
+
+def attempt(grow: Callable[..., Search], *args: Any, **kwargs: Any) -> Attempt:
+    """``grow(*args, **kwargs)`` (RRT or RRT*) with a search that found no path counted, not raised."""
+    try:
+        search = grow(*args, **kwargs)
+    except NoPathInTreeError as err:
+        return Attempt(None, err.iterations, err.nodes)
+    return Attempt(search, search.result.iterations, len(search.tree))
+
+
 def run_rrt_star(grid: OccupancyGrid, start: Pose2D, goal: Any, *, budget: float, target: float, seed: int) -> Run:
-    search = grow_rrt_star(
-        start, goal, grid, RRTStarConfig(time_budget=budget), np.random.default_rng(seed), clock=CLOCK
+    r = attempt(
+        grow_rrt_star, start, goal, grid, RRTStarConfig(time_budget=budget), np.random.default_rng(seed), clock=CLOCK
     )
-    r = search.result
-    to_target = next((t for _, t, length in search.history if length <= target), math.inf)
-    return Run(r.success, r.first_solution_s or math.inf, r.length_m, to_target, r.iterations)
+    history = r.search.history if r.search is not None else ()
+    to_target = next((t for _, t, length in history if length <= target), math.inf)
+    return Run(r.search is not None, r.first_s, r.length, to_target, r.iterations)
 
 
 def run_rrt(grid: OccupancyGrid, start: Pose2D, goal: Any, seed: int) -> Run:
     config = RRTConfig(iterations=None, time_budget=10.0)
-    r = grow_rrt(start, goal, grid, config, np.random.default_rng(seed), clock=CLOCK).result
-    return Run(r.success, r.first_solution_s or math.inf, r.length_m, math.inf, r.iterations)
+    r = attempt(grow_rrt, start, goal, grid, config, np.random.default_rng(seed), clock=CLOCK)
+    return Run(r.search is not None, r.first_s, r.length, math.inf, r.iterations)
 
 
 class OmplPlanner:
@@ -323,7 +353,8 @@ def _scaling_section(args: argparse.Namespace) -> str:
         first, rate, found = [], [], 0
         for seed in range(10):
             t0 = CLOCK()
-            search = grow_rrt_star(
+            tried = attempt(
+                grow_rrt_star,
                 start,
                 goal,
                 grid,
@@ -332,11 +363,12 @@ def _scaling_section(args: argparse.Namespace) -> str:
                 clock=CLOCK,
             )
             spent = CLOCK() - t0
-            found += search.result.success
-            first.append(search.result.first_solution_s or math.inf)
-            rate.append(search.result.iterations / spent)
+            found += tried.search is not None
+            first.append(tried.first_s)
+            rate.append(tried.iterations / spent)
         memory = _peak_memory(
             partial(
+                attempt,
                 grow_rrt_star,
                 start,
                 goal,
@@ -375,17 +407,19 @@ def _scaling_section(args: argparse.Namespace) -> str:
     for count in (500, 1000, 2000, 4000, 8000):
         config = RRTStarConfig(iterations=count, time_budget=None)
         t0 = CLOCK()
-        search = grow_rrt_star(ARENA_START, ARENA_GOAL, arena, config, np.random.default_rng(1))
+        tried = attempt(grow_rrt_star, ARENA_START, ARENA_GOAL, arena, config, np.random.default_rng(1))
         spent = CLOCK() - t0
-        memory = _peak_memory(partial(grow_rrt_star, ARENA_START, ARENA_GOAL, arena, config, np.random.default_rng(1)))
+        memory = _peak_memory(
+            partial(attempt, grow_rrt_star, ARENA_START, ARENA_GOAL, arena, config, np.random.default_rng(1))
+        )
         iter_rows.append(
             [
                 count,
-                len(search.tree),
+                tried.nodes,
                 f"{spent:.3f}",
                 f"{spent / count * 1e6:.0f}",
                 f"{memory:.1f}",
-                f"{search.result.length_m:.3f}",
+                f"{tried.length:.3f}",
             ]
         )
     iter_table = markdown_table(
@@ -438,8 +472,8 @@ def _first_paths(grid: OccupancyGrid, start: Pose2D, goals: Any, seeds: int, bud
     for seed in range(seeds):
         config = RRTStarConfig(time_budget=budget, stop_at_first=True)
         goal = np.array(goals[seed % len(goals)])
-        r = grow_rrt_star(start, goal, grid, config, np.random.default_rng(seed), clock=CLOCK).result
-        out.append(r.first_solution_s if r.success and r.first_solution_s is not None else math.inf)
+        tried = attempt(grow_rrt_star, start, goal, grid, config, np.random.default_rng(seed), clock=CLOCK)
+        out.append(tried.search.result.first_solution_s if tried.search is not None else math.inf)
     return out
 
 
@@ -485,11 +519,11 @@ def _comparison_section(args: argparse.Namespace) -> str:
         for seed in seeds:
             goal = np.array(goals[seed % len(goals)])
             config = RRTStarConfig(time_budget=BUDGETS[-1])
-            search = grow_rrt_star(start, goal, grid, config, np.random.default_rng(seed), clock=CLOCK)
-            ours_l.append([_length_at(search.history, b) for b in BUDGETS])
-            ours_f.append(search.result.first_solution_s or math.inf)
-            if search.result.success:
-                clear.append(_clearance(search.result.path, obstacles))
+            tried = attempt(grow_rrt_star, start, goal, grid, config, np.random.default_rng(seed), clock=CLOCK)
+            ours_l.append([_length_at(tried.search.history if tried.search else (), b) for b in BUDGETS])
+            ours_f.append(tried.first_s)
+            if tried.search is not None:
+                clear.append(_clearance(tried.search.result.path, obstacles))
             for label, planner, radius in OMPL_PEERS:
                 ompl = OmplPlanner(grid, start, goal, turning_radius=radius, planner=planner)
                 firsts.setdefault(label, []).append(ompl.solve(BUDGETS[-1], math.inf)[0])
@@ -536,10 +570,11 @@ def _building_section(args: argparse.Namespace) -> str:
     first = []
     for seed in range(args.building_seeds):
         config = RRTStarConfig(time_budget=1.0, stop_at_first=True)
-        r = grow_rrt_star(OFFICE_START, goal, grid, config, np.random.default_rng(seed), clock=CLOCK).result
-        first.append(r.first_solution_s if r.success and r.first_solution_s is not None else math.inf)
+        tried = attempt(grow_rrt_star, OFFICE_START, goal, grid, config, np.random.default_rng(seed), clock=CLOCK)
+        first.append(tried.search.result.first_solution_s if tried.search is not None else math.inf)
     memory = _peak_memory(
         partial(
+            attempt,
             grow_rrt_star,
             OFFICE_START,
             goal,

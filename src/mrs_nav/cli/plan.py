@@ -2,7 +2,8 @@
 
 Exit status: 0 when the goal is reached, 2 when it is not (the planner's reason on stderr), 1 on bad input.
 Planners are looked up in :data:`PLANNERS`: a name on the command line -> a function of the parsed
-arguments, the start pose and the goal returning a :class:`~mrs_nav.planning.PlanResult`.
+arguments, the start pose and the goal returning a :class:`~mrs_nav.planning.PlanResult`, or raising
+:class:`~mrs_nav.errors.NoPathFoundError` when it does not reach the goal.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from typing import Any
 
 from mrs_nav.cli import tree_planners
 from mrs_nav.cli.common import fail, print_json
-from mrs_nav.errors import InvalidInputError
+from mrs_nav.errors import InvalidInputError, NoPathFoundError
 from mrs_nav.fields.potential_field import DEFAULT_GOAL_FADE, Bounds, PotentialField, workspace_bounds
 from mrs_nav.fields.randomized_potential_field import EscapeSettings, plan_potential_field
 from mrs_nav.geometry import Pose2D
@@ -132,7 +133,14 @@ def run(args: argparse.Namespace) -> int:
     start_values = parse_floats(args.start, (2, 3), "--start")
     start = Pose2D(*start_values)
     gx, gy = parse_floats(args.goal, 2, "--goal")
-    result = PLANNERS[args.planner](args, start, (gx, gy))
+    try:
+        result = PLANNERS[args.planner](args, start, (gx, gy))
+    except NoPathFoundError as err:
+        if args.json:
+            print_json(no_path_json(err))
+        else:
+            print(f"{args.planner}: {err.reason} in {err.time_s * 1000:.1f} ms ({err.iterations} iterations)")
+        return fail(f"goal not reached: {err.reason}", 2)
     if args.json:
         print_json(result.to_json())
     else:
@@ -140,6 +148,18 @@ def run(args: argparse.Namespace) -> int:
             f"{args.planner}: {result.reason}; {result.length_m:.3f} m through {result.path.shape[0]} waypoints "
             f"in {result.time_s * 1000:.1f} ms ({result.iterations} iterations)"
         )
-    if not result.success:
-        return fail(f"goal not reached: {result.reason}", 2)
     return 0
+
+
+def no_path_json(err: NoPathFoundError) -> dict[str, object]:
+    """The ``--json`` object of a query that found no path: the keys of :meth:`PlanResult.to_json`, no path."""
+    return {
+        "success": False,
+        "length_m": 0.0,
+        "time_s": err.time_s,
+        "first_solution_s": None,
+        "iterations": err.iterations,
+        "nodes": err.nodes,
+        "reason": err.reason,
+        "path": [],
+    }

@@ -21,7 +21,8 @@ The point moves by explicit Euler steps ``x[t + dt] = x[t] + v dt`` in one of tw
   distance to the goal, which has no local minimum, and returns to best first once that distance is
   ``guide_margin`` below the distance at the worst trap so far *and* the goal is in straight sight. The guide
   never passes a gap the (grown) obstacles close; when it says the goal cannot be reached from the start at all
-  (e.g. behind a door narrower than the robot), every seed fails at once with the reason :data:`NO_PATH`.
+  (e.g. behind a door narrower than the robot), :func:`roll_out` raises :class:`NoPathFoundError` with the reason
+  :data:`NO_PATH` before any step.
 
 Steps that would enter an obstacle are refused (the point stays and, in a walk, draws a new heading), so
 the trajectory never crosses an obstacle even where the random walk's speed exceeds the field's.
@@ -40,7 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mrs_nav.errors import InvalidInputError
+from mrs_nav.errors import InvalidInputError, NoPathFoundError
 from mrs_nav.fields.navigation_function import NavigationFunction
 from mrs_nav.fields.path_simplification import simplify_path
 from mrs_nav.fields.potential_field import PotentialField, cap, workspace_bounds
@@ -102,13 +103,16 @@ class EscapeSettings:
 class Rollout:
     """One seed's trajectory ``(K, 2)`` (not simplified), whether it reached the goal and why it stopped.
 
+    A rollout is the simulated descent, kept whole for figures and benchmarks even when it ends short of the goal;
+    the planner (:func:`plan_potential_field`) turns one that did not reach it into :class:`NoPathFoundError`.
+
     ``walking[k]`` tells whether step ``k -> k + 1`` was an escape step, random walk or guided (``(K - 1,)``).
     """
 
     seed: int
     trajectory: FloatArray
     walking: BoolArray
-    success: bool
+    reached: bool
     reason: str
     steps: int
     walk_steps: int
@@ -129,6 +133,8 @@ def roll_out(
     """Simulate the randomised descent from ``start`` once per seed, vectorised over the seeds.
 
     ``guide`` (built from ``field`` and ``start`` when not given) is used only when ``settings`` turn it on.
+    Raises :class:`NoPathFoundError` (:data:`NO_PATH`) when the guide says the goal cannot be reached from
+    ``start`` at all.
     """
     s = settings
     if any(seed < 0 for seed in seeds):
@@ -143,10 +149,7 @@ def roll_out(
         guide = navigation_guide(field, start)
     if guide is not None and not guide.reaches_goal(start_xy[None, :])[0]:
         # Refused before any step: no walk could get there, and the descent must not squeeze through.
-        return [
-            Rollout(int(seed), start_xy[None, :].copy(), np.zeros(0, dtype=bool), False, NO_PATH, 0, 0)
-            for seed in seeds
-        ]
+        raise NoPathFoundError(NO_PATH)
     n = len(seeds)
     noise = np.empty((s.max_steps, n, 2))
     turns = np.empty((s.max_steps, n))
@@ -282,13 +285,16 @@ def planned_points(
     """
     points = rollout.trajectory
     goal = np.asarray(field.goal, dtype=np.float64)
-    if rollout.success and field.obstacles.segments_free(points[-1:], goal[None, :])[0]:
+    if rollout.reached and field.obstacles.segments_free(points[-1:], goal[None, :])[0]:
         points = np.vstack([points, goal])
     if not simplify:
         return points
     path = simplify_path(points, field.obstacles.segments_free)
-    corridor = guide.corridor(points[0]) if guide is not None and rollout.success else None
-    if corridor is None:
+    if guide is None or not rollout.reached:
+        return path
+    try:
+        corridor = guide.corridor(points[0])
+    except NoPathFoundError:
         return path
     shortcut = simplify_path(corridor, field.obstacles.segments_free)
     if field.obstacles.path_free(shortcut) and path_length(shortcut) < path_length(path):
@@ -308,20 +314,27 @@ def plan_potential_field(
 
     The waypoints are :func:`planned_points` of the rollout (with the guide when ``settings`` use one), each
     with the heading of the segment leaving it; the first keeps the start's yaw and the last the heading of the
-    segment reaching it.
+    segment reaching it. Raises :class:`NoPathFoundError` with the reason when the goal is not reached (the
+    step budget used up, a stall, or no way through the obstacles).
     """
     began = time.perf_counter()
     guide = navigation_guide(field, (start[0], start[1])) if settings.guide_after_walks is not None else None
     (rollout,) = roll_out(field, (start[0], start[1]), [seed], settings, guide)
+    if not rollout.reached:
+        raise NoPathFoundError(
+            rollout.reason,
+            time_s=time.perf_counter() - began,
+            iterations=rollout.steps,
+            nodes=int(rollout.trajectory.shape[0]),
+        )
     path = headings_along(planned_points(field, rollout, simplify=simplify, guide=guide))
     path[0, 2] = start[2]
     elapsed = time.perf_counter() - began
     return PlanResult(
-        success=rollout.success,
         path=path,
         length_m=path_length(path),
         time_s=elapsed,
-        first_solution_s=elapsed if rollout.success else None,
+        first_solution_s=elapsed,
         iterations=rollout.steps,
         nodes=int(path.shape[0]),
         reason=rollout.reason,

@@ -26,7 +26,7 @@ from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.occupancy_grid import IntArray, OccupancyGrid
 from mrs_nav.planning import PlanResult, path_length
 from mrs_nav.trees import arcs
-from mrs_nav.trees.tree import ArcTree, Search
+from mrs_nav.trees.tree import ArcTree, Search, budget_used_up
 
 # How many nearest nodes are screened for a parent before falling back to every node within max_step.
 _PARENT_CANDIDATES = 16
@@ -154,6 +154,9 @@ def grow_rrt(
 ) -> Search:
     """Run RRT from ``start`` to ``goal`` (x, y) on ``grid``; return the result with its tree (for drawing).
 
+    Raises :class:`~mrs_nav.trees.tree.NoPathInTreeError` (a :class:`NoPathFoundError` holding the tree) when the
+    budget ends first, and :class:`InvalidInputError` when the start or goal is not admissible.
+
     Times and the budget are read from ``clock`` (wall time by default; benchmarks on a shared machine may pass
     :func:`time.process_time`)."""
     t0 = clock()
@@ -183,9 +186,7 @@ def grow_rrt(
                 )
         if reached:
             return _solved(tree, node, None, grid, elapsed=clock() - t0, iterations=iteration)
-    elapsed = clock() - t0
-    reason = "iteration budget used up" if iteration >= limit else "time budget used up"
-    return Search(failed(start, elapsed, iteration, len(tree), f"no path found: {reason}"), tree, ())
+    raise budget_used_up(tree, used_iterations=iteration >= limit, time_s=clock() - t0, iterations=iteration)
 
 
 def _solved(
@@ -193,14 +194,8 @@ def _solved(
 ) -> Search:
     path = tree.path_poses(tree.branch(node), grid.resolution, tail)
     length = path_length(path)
-    result = PlanResult(True, path, length, elapsed, elapsed, iterations, len(tree), "goal reached")
+    result = PlanResult(path, length, elapsed, elapsed, iterations, len(tree), "goal reached")
     return Search(result, tree, ((iterations, elapsed, length),))
-
-
-def failed(start: Pose2D, elapsed: float, iterations: int, nodes: int, reason: str) -> PlanResult:
-    """The result of a search that found nothing: the path is the start pose alone."""
-    path = np.array([[start.x, start.y, start.yaw]])
-    return PlanResult(False, path, 0.0, elapsed, None, iterations, nodes, reason)
 
 
 def rrt(
@@ -210,5 +205,5 @@ def rrt(
     config: RRTConfig | None = None,
     rng: np.random.Generator | None = None,
 ) -> PlanResult:
-    """RRT from ``start`` to ``goal`` on ``grid`` (already inflated); see the module docstring."""
+    """RRT from ``start`` to ``goal`` on ``grid`` (already inflated); see the module docstring and :func:`grow_rrt`."""
     return grow_rrt(start, goal, grid, config or RRTConfig(), rng or np.random.default_rng()).result

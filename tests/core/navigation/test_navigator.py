@@ -80,7 +80,7 @@ def astar(grid: OccupancyGrid, start: Pose2D, goal: tuple[float, float], rng: np
     points[0] = (start.x, start.y)
     points[-1] = goal
     path = headings_along(points)
-    return PlanResult(True, path, path_length(path), time.perf_counter() - t0, 0.0, len(cost), len(cost), "found")
+    return PlanResult(path, path_length(path), time.perf_counter() - t0, 0.0, len(cost), len(cost), "found")
 
 
 def drive(nav: Navigator, pose: Pose2D, seconds: float, dt: float = 0.1, t0: float = 0.0) -> tuple[Pose2D, list]:
@@ -226,7 +226,7 @@ class ScriptedPlanner:
         direction = np.subtract(goal, [start.x, start.y]) / (2.0 * half)
         mid = mid + side * np.array([-direction[1], direction[0]])
         path = headings_along(np.array([[start.x, start.y], mid, goal]))
-        return PlanResult(True, path, path_length(path), 0.001, 0.001, 1, 3, "found")
+        return PlanResult(path, path_length(path), 0.001, 0.001, 1, 3, "found")
 
 
 def test_periodic_plans_replace_the_path_only_when_clearly_shorter() -> None:
@@ -335,7 +335,7 @@ def test_a_goal_behind_the_robot_is_planned_from_the_robot_turned_round() -> Non
         path = headings_along(np.array([[start.x, start.y], goal]))
         path[0, 2] = start.yaw
         extra = 0.0 if ahead > 0.0 else 2.0 * math.pi * 0.3
-        return PlanResult(True, path, path_length(path) + extra, 0.001, 0.001, 1, 2, "found")
+        return PlanResult(path, path_length(path) + extra, 0.001, 0.001, 1, 2, "found")
 
     nav = Navigator(forward_only)
     nav.set_map(arena(), 0.0)
