@@ -47,6 +47,7 @@ from mrs_nav.fields.path_simplification import simplify_path
 from mrs_nav.fields.potential_field import PotentialField, cap, workspace_bounds
 from mrs_nav.geometry import FloatArray
 from mrs_nav.maps.obstacles import BoolArray
+from mrs_nav.maps.occupancy_grid import IntArray
 from mrs_nav.planning import PlanResult, headings_along, path_length
 
 REACHED = "goal reached"
@@ -136,140 +137,190 @@ def roll_out(
     Raises :class:`NoPathFoundError` (:data:`NO_PATH`) when the guide says the goal cannot be reached from
     ``start`` at all.
     """
-    s = settings
     if any(seed < 0 for seed in seeds):
         raise InvalidInputError(f"seeds must be >= 0, got {min(seeds)}")
     start_xy = np.asarray(start, dtype=np.float64)
     if field.obstacles.contains(start_xy)[0]:
         raise InvalidInputError(f"start ({start[0]}, {start[1]}) is inside an obstacle")
-    goal = np.asarray(field.goal, dtype=np.float64)
-    if s.guide_after_walks is None:
+    if settings.guide_after_walks is None:
         guide = None
     elif guide is None:
         guide = navigation_guide(field, start)
     if guide is not None and not guide.reaches_goal(start_xy[None, :])[0]:
         # Refused before any step: no walk could get there, and the descent must not squeeze through.
         raise NoPathFoundError(NO_PATH)
-    n = len(seeds)
-    noise = np.empty((s.max_steps, n, 2))
-    turns = np.empty((s.max_steps, n))
-    heading = np.empty(n)
-    for i, seed in enumerate(seeds):
-        rng = np.random.default_rng(seed)
-        heading[i] = rng.uniform(-math.pi, math.pi)
-        noise[:, i] = rng.normal(0.0, s.noise_std, (s.max_steps, 2)) if s.noise_std > 0 else 0.0
-        turns[:, i] = rng.normal(0.0, s.walk_angle_std, s.max_steps)
-
-    guiding = np.zeros(n, dtype=bool)
-    walks = np.zeros(n, dtype=np.int64)
-    trap = np.full(n, math.inf)
-    guide_best = np.full(n, math.inf)  # the nearest to the goal (guide's distance) in the current guided phase
-    guide_idle = np.zeros(n, dtype=np.int64)  # guided steps since that improved
-    path = np.empty((s.max_steps + 1, n, 2))
-    path[0] = start_xy
-    walked = np.zeros((s.max_steps, n), dtype=bool)
-    x = np.repeat(start_xy[None, :], n, axis=0)
-    active = np.hypot(*(x - goal).T) > s.goal_tolerance
-    finished = np.where(active, -1, 0)
-    walking = np.zeros(n, dtype=bool)
-    walk_age = np.zeros(n, dtype=np.int64)
-    slow_for = np.zeros(n, dtype=np.int64)
-    reasons = ["" if a else REACHED for a in active]
-
-    for k in range(s.max_steps):
-        if not active.any():
+    descent = _Descent(field, guide, settings, start_xy, seeds)
+    for k in range(settings.max_steps):
+        if not descent.active.any():
             break
-        idx = np.flatnonzero(active)
-        here = x[idx]
+        descent.step(k)
+    return descent.rollouts(seeds)
+
+
+class _Descent:
+    """The seeds of one :func:`roll_out` (every array holds one entry per seed) and the Euler step of the active ones.
+
+    Each seed's random draws are made up front, in the same order whatever the batch, so a seed's trajectory does
+    not depend on the others.
+    """
+
+    def __init__(
+        self,
+        field: PotentialField,
+        guide: NavigationFunction | None,
+        settings: EscapeSettings,
+        start_xy: FloatArray,
+        seeds: Sequence[int],
+    ) -> None:
+        s = settings
+        self.field, self.guide, self.s = field, guide, s
+        self.goal = np.asarray(field.goal, dtype=np.float64)
+        n = len(seeds)
+        self.noise = np.empty((s.max_steps, n, 2))
+        self.turns = np.empty((s.max_steps, n))
+        self.heading = np.empty(n)
+        for i, seed in enumerate(seeds):
+            rng = np.random.default_rng(seed)
+            self.heading[i] = rng.uniform(-math.pi, math.pi)
+            self.noise[:, i] = rng.normal(0.0, s.noise_std, (s.max_steps, 2)) if s.noise_std > 0 else 0.0
+            self.turns[:, i] = rng.normal(0.0, s.walk_angle_std, s.max_steps)
+        self.guiding = np.zeros(n, dtype=bool)
+        self.walks = np.zeros(n, dtype=np.int64)
+        self.trap = np.full(n, math.inf)
+        self.guide_best = np.full(n, math.inf)  # the nearest to the goal (guide's distance) in the current guided phase
+        self.guide_idle = np.zeros(n, dtype=np.int64)  # guided steps since that improved
+        self.path = np.empty((s.max_steps + 1, n, 2))
+        self.path[0] = start_xy
+        self.walked = np.zeros((s.max_steps, n), dtype=bool)
+        self.x = np.repeat(start_xy[None, :], n, axis=0)
+        self.active = np.hypot(*(self.x - self.goal).T) > s.goal_tolerance
+        self.finished = np.where(self.active, -1, 0)
+        self.walking = np.zeros(n, dtype=bool)
+        self.walk_age = np.zeros(n, dtype=np.int64)
+        self.slow_for = np.zeros(n, dtype=np.int64)
+        self.reasons = ["" if a else REACHED for a in self.active]
+
+    def step(self, k: int) -> None:
+        """Euler step ``k`` of every active seed: pick its mode, move it unless the step enters an obstacle, and
+        end it at the goal or (random walk off) after a long stall."""
+        s, field = self.s, self.field
+        idx = np.flatnonzero(self.active)
+        here = self.x[idx]
         uncapped = field.attractive(here) + field.repulsive(here)
         clean = cap(uncapped, field.max_speed)
-        stalled = (np.hypot(clean[:, 0], clean[:, 1]) < s.stall_speed) & (np.hypot(*(here - goal).T) > s.stall_distance)
-        slow_for[idx] = np.where(stalled, slow_for[idx] + 1, 0)
-        fresh = stalled & ~walking[idx] & ~guiding[idx]
-        if guide is not None and s.guide_after_walks is not None:
-            handed = fresh & (walks[idx] >= s.guide_after_walks)
-            guiding[idx[handed]] = True
-            guide_best[idx[handed]], guide_idle[idx[handed]] = math.inf, 0
-            trap[idx[handed]] = np.minimum(trap[idx[handed]], guide.distance(here[handed]))
-            fresh &= ~handed
-        if s.random_walk:
-            walking[idx[fresh]] = True
-            walk_age[idx[fresh]] = 0
-            walks[idx[fresh]] += 1
-        walk = walking[idx]
-        led = guiding[idx]
-        heading[idx[walk]] += turns[k, idx[walk]]
-        v = cap(uncapped + noise[k, idx], field.max_speed) if s.noise_std > 0 else clean
-        v[walk] = field.v_max * np.column_stack([np.cos(heading[idx[walk]]), np.sin(heading[idx[walk]])])
-        if guide is not None and led.any():
-            # Towards the wavefront target; where that step is blocked (a corner it would cut), towards the cell the
-            # point sees down the distance, and where even that is blocked, with the obstacles' push added, so that
-            # the point slides along the obstacle.
-            ahead = cap((guide.downhill(here[led]) - here[led]) / s.dt, field.max_speed)
-            direct = field.obstacles.segments_free(here[led], here[led] + s.dt * ahead)
-            near = cap((guide.downhill(here[led], 0) - here[led]) / s.dt, field.max_speed)
-            near_ok = field.obstacles.segments_free(here[led], here[led] + s.dt * near)
-            pushed = cap(ahead + field.repulsive(here[led]), field.max_speed)
-            v[led] = np.where(direct[:, None], ahead, np.where(near_ok[:, None], near, pushed))
+        self._switch_modes(idx, here, clean)
+        walk = self.walking[idx]
+        led = self.guiding[idx]
+        self.heading[idx[walk]] += self.turns[k, idx[walk]]
+        v = cap(uncapped + self.noise[k, idx], field.max_speed) if s.noise_std > 0 else clean
+        v[walk] = field.v_max * np.column_stack([np.cos(self.heading[idx[walk]]), np.sin(self.heading[idx[walk]])])
+        if self.guide is not None and led.any():
+            v[led] = self._guided_velocity(self.guide, here[led])
         proposed = here + s.dt * v
         ok = field.obstacles.segments_free(here, proposed)
         new = np.where(ok[:, None], proposed, here)
-        x[idx] = new
-        path[k + 1] = x
+        self.x[idx] = new
+        self.path[k + 1] = self.x
 
-        walked[k, idx[walk | led]] = True
-        walk_age[idx[walk]] += 1
-        if guide is not None and led.any():
-            ids, left = idx[led], guide.distance(new[led])
-            closer = left < trap[ids] - s.guide_margin
-            sight = field.obstacles.segments_free(new[led], np.repeat(goal[None, :], int(led.sum()), axis=0))
-            guiding[ids[closer & sight]] = False
-            # A guided point that stops getting closer (it dithers at a corner where the step to the target and
-            # the slide along the obstacle are both blocked, or sits in a gap narrower than the cells resolve,
-            # where the distance is unknown) would stay for good: it walks off and is guided at its next stall.
-            gained = left < guide_best[ids] - 1e-3
-            guide_best[ids] = np.where(gained, left, guide_best[ids])
-            guide_idle[ids] = np.where(gained, 0, guide_idle[ids] + 1)
-            lost = ids[guiding[ids] & (guide_idle[ids] > s.guide_patience)]
-            guiding[lost] = False
-            walking[lost] = s.random_walk
-            walk_age[lost] = 0
-            walks[lost] += 1
+        self.walked[k, idx[walk | led]] = True
+        self.walk_age[idx[walk]] += 1
+        if self.guide is not None and led.any():
+            self._end_guided_phases(self.guide, idx[led], new[led])
         if walk.any():
             moved = new[walk] - here[walk]
             downhill = np.einsum("ij,ij->i", moved, field.velocity(new[walk])) > 0.0
-            leave = downhill & (walk_age[idx[walk]] > s.min_walk_steps)
-            walking[idx[walk][leave]] = False
+            leave = downhill & (self.walk_age[idx[walk]] > s.min_walk_steps)
+            self.walking[idx[walk][leave]] = False
+        self._finish(k, idx, new)
 
-        arrived = np.hypot(*(new - goal).T) <= s.goal_tolerance
+    def _switch_modes(self, idx: IntArray, here: FloatArray, clean: FloatArray) -> None:
+        """Count stalls; hand a fresh stall to the guide (after enough walks) or to a random walk."""
+        s = self.s
+        stalled = (np.hypot(clean[:, 0], clean[:, 1]) < s.stall_speed) & (
+            np.hypot(*(here - self.goal).T) > s.stall_distance
+        )
+        self.slow_for[idx] = np.where(stalled, self.slow_for[idx] + 1, 0)
+        fresh = stalled & ~self.walking[idx] & ~self.guiding[idx]
+        if self.guide is not None and s.guide_after_walks is not None:
+            handed = fresh & (self.walks[idx] >= s.guide_after_walks)
+            self.guiding[idx[handed]] = True
+            self.guide_best[idx[handed]], self.guide_idle[idx[handed]] = math.inf, 0
+            self.trap[idx[handed]] = np.minimum(self.trap[idx[handed]], self.guide.distance(here[handed]))
+            fresh &= ~handed
+        if s.random_walk:
+            self.walking[idx[fresh]] = True
+            self.walk_age[idx[fresh]] = 0
+            self.walks[idx[fresh]] += 1
+
+    def _guided_velocity(self, guide: NavigationFunction, here: FloatArray) -> FloatArray:
+        """Towards the wavefront target; where that step is blocked (a corner it would cut), towards the cell the
+        point sees down the distance, and where even that is blocked, with the obstacles' push added, so that the
+        point slides along the obstacle."""
+        s, field = self.s, self.field
+        ahead = cap((guide.downhill(here) - here) / s.dt, field.max_speed)
+        direct = field.obstacles.segments_free(here, here + s.dt * ahead)
+        near = cap((guide.downhill(here, 0) - here) / s.dt, field.max_speed)
+        near_ok = field.obstacles.segments_free(here, here + s.dt * near)
+        pushed = cap(ahead + field.repulsive(here), field.max_speed)
+        out: FloatArray = np.where(direct[:, None], ahead, np.where(near_ok[:, None], near, pushed))
+        return out
+
+    def _end_guided_phases(self, guide: NavigationFunction, ids: IntArray, new: FloatArray) -> None:
+        """Back to best first once well past the trap with the goal in sight; to a walk when no longer gaining."""
+        s = self.s
+        left = guide.distance(new)
+        closer = left < self.trap[ids] - s.guide_margin
+        sight = self.field.obstacles.segments_free(new, np.repeat(self.goal[None, :], len(ids), axis=0))
+        self.guiding[ids[closer & sight]] = False
+        # A guided point that stops getting closer (it dithers at a corner where the step to the target and the
+        # slide along the obstacle are both blocked, or sits in a gap narrower than the cells resolve, where the
+        # distance is unknown) would stay for good: it walks off and is guided at its next stall.
+        gained = left < self.guide_best[ids] - 1e-3
+        self.guide_best[ids] = np.where(gained, left, self.guide_best[ids])
+        self.guide_idle[ids] = np.where(gained, 0, self.guide_idle[ids] + 1)
+        lost = ids[self.guiding[ids] & (self.guide_idle[ids] > s.guide_patience)]
+        self.guiding[lost] = False
+        self.walking[lost] = s.random_walk
+        self.walk_age[lost] = 0
+        self.walks[lost] += 1
+
+    def _finish(self, k: int, idx: IntArray, new: FloatArray) -> None:
+        """End the seeds that arrived, and (random walk off) those stalled for ``stall_steps``."""
+        s = self.s
+        arrived = np.hypot(*(new - self.goal).T) <= s.goal_tolerance
         for j in idx[arrived]:
-            reasons[j] = REACHED
-        stuck = ~arrived & (slow_for[idx] >= s.stall_steps) & (not s.random_walk)
+            self.reasons[j] = REACHED
+        stuck = ~arrived & (self.slow_for[idx] >= s.stall_steps) & (not s.random_walk)
         for j in idx[stuck]:
-            reasons[j] = (
-                f"stalled at ({x[j, 0]:.3f}, {x[j, 1]:.3f}): the field vanishes away from the goal "
+            self.reasons[j] = (
+                f"stalled at ({self.x[j, 0]:.3f}, {self.x[j, 1]:.3f}): the field vanishes away from the goal "
                 "(saddle point or local minimum)"
             )
         done = arrived | stuck
-        finished[idx[done]] = k + 1
-        active[idx[done]] = False
+        self.finished[idx[done]] = k + 1
+        self.active[idx[done]] = False
 
-    results = []
-    for i, seed in enumerate(seeds):
-        steps = int(finished[i]) if finished[i] >= 0 else s.max_steps
-        reason = reasons[i] or f"step budget used up ({s.max_steps} steps of {s.dt} s) before reaching the goal"
-        results.append(
-            Rollout(
-                int(seed),
-                path[: steps + 1, i].copy(),
-                walked[:steps, i].copy(),
-                reason == REACHED,
-                reason,
-                steps,
-                int(walked[:steps, i].sum()),
+    def rollouts(self, seeds: Sequence[int]) -> list[Rollout]:
+        """Each seed's :class:`Rollout`, cut where it ended."""
+        s = self.s
+        results = []
+        for i, seed in enumerate(seeds):
+            steps = int(self.finished[i]) if self.finished[i] >= 0 else s.max_steps
+            reason = (
+                self.reasons[i] or f"step budget used up ({s.max_steps} steps of {s.dt} s) before reaching the goal"
             )
-        )
-    return results
+            results.append(
+                Rollout(
+                    int(seed),
+                    self.path[: steps + 1, i].copy(),
+                    self.walked[:steps, i].copy(),
+                    reason == REACHED,
+                    reason,
+                    steps,
+                    int(self.walked[:steps, i].sum()),
+                )
+            )
+        return results
 
 
 def planned_points(
