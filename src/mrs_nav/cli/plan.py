@@ -20,6 +20,7 @@ from mrs_nav.fields.potential_field import DEFAULT_GOAL_FADE, Bounds, PotentialF
 from mrs_nav.fields.randomized_potential_field import EscapeSettings, plan_potential_field
 from mrs_nav.geometry import Pose2D
 from mrs_nav.limits import MAX_ITERATIONS, MAX_ROBOT_RADIUS_M, MAX_SEED, MAX_SIZE_M
+from mrs_nav.maps.admissible import obstacles_refusal
 from mrs_nav.maps.obstacles import Obstacles
 from mrs_nav.maps.world import load_world
 from mrs_nav.options import count_option, number_option, parse_floats, radius_option, seed_option
@@ -55,16 +56,9 @@ def check_free(
 ) -> None:
     """Raise :class:`InvalidInputError` when ``(x, y)`` is outside ``bounds``, inside an obstacle or, for a
     robot of ``robot_radius`` (m), close enough to one that the robot would overlap it."""
-    if bounds is not None and not (bounds[0] <= x <= bounds[2] and bounds[1] <= y <= bounds[3]):
-        raise InvalidInputError(
-            f"{what} ({x}, {y}) is outside the world [{bounds[0]:g}, {bounds[2]:g}] x [{bounds[1]:g}, {bounds[3]:g}]"
-        )
-    if obstacles.contains((x, y))[0]:
-        raise InvalidInputError(f"{what} ({x}, {y}) is inside an obstacle")
-    if robot_radius > 0.0 and obstacles.inflated(robot_radius).contains((x, y))[0]:
-        raise InvalidInputError(
-            f"{what} ({x}, {y}) is within --robot-radius {robot_radius:g} m of an obstacle: the robot would overlap it"
-        )
+    why = obstacles_refusal(obstacles, x, y, bounds=bounds, clearance_m=robot_radius, clearance_name="--robot-radius")
+    if why:
+        raise InvalidInputError(f"{what} ({x}, {y}) is {why}")
 
 
 def plan_with_potential_field(args: argparse.Namespace, start: Pose2D, goal: tuple[float, float]) -> PlanResult:

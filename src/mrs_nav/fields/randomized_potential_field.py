@@ -46,6 +46,7 @@ from mrs_nav.fields.navigation_function import NavigationFunction
 from mrs_nav.fields.path_simplification import simplify_path
 from mrs_nav.fields.potential_field import PotentialField, cap, workspace_bounds
 from mrs_nav.geometry import FloatArray
+from mrs_nav.maps.admissible import obstacles_refusal
 from mrs_nav.maps.obstacles import BoolArray
 from mrs_nav.maps.occupancy_grid import IntArray
 from mrs_nav.planning import PlanResult, headings_along, path_length
@@ -140,8 +141,9 @@ def roll_out(
     if any(seed < 0 for seed in seeds):
         raise InvalidInputError(f"seeds must be >= 0, got {min(seeds)}")
     start_xy = np.asarray(start, dtype=np.float64)
-    if field.obstacles.contains(start_xy)[0]:
-        raise InvalidInputError(f"start ({start[0]}, {start[1]}) is inside an obstacle")
+    why = obstacles_refusal(field.obstacles, start[0], start[1])
+    if why:
+        raise InvalidInputError(f"start ({start[0]}, {start[1]}) is {why}")
     if settings.guide_after_walks is None:
         guide = None
     elif guide is None:

@@ -32,6 +32,7 @@ import numpy as np
 
 from mrs_nav.errors import InvalidInputError, NoPathFoundError
 from mrs_nav.geometry import FloatArray
+from mrs_nav.maps.admissible import obstacles_refusal
 from mrs_nav.maps.obstacles import BoolArray, Obstacles
 from mrs_nav.maps.occupancy_grid import IntArray
 
@@ -101,8 +102,9 @@ def shortest_path(start: tuple[float, float], goal: tuple[float, float], obstacl
     obs = np.vstack([obstacles.circles, np.column_stack([corners, np.zeros(len(corners))])])
     a, b = np.asarray(start, dtype=np.float64), np.asarray(goal, dtype=np.float64)
     for name, p in (("start", a), ("goal", b)):
-        if obstacles.contains(p, -_TOL)[0]:
-            raise InvalidInputError(f"{name} ({p[0]}, {p[1]}) is inside an obstacle")
+        why = obstacles_refusal(obstacles, p[0], p[1], tolerance_m=_TOL)
+        if why:
+            raise InvalidInputError(f"{name} ({p[0]}, {p[1]}) is {why}")
     graph = _TangentGraph(a, b, obs)
     xy = np.array(graph.points)
     # A bitangent may touch a circle only where it is tangent: tangent points inside another circle are hidden.

@@ -13,11 +13,9 @@ import math
 from dataclasses import dataclass
 from enum import Enum
 
-import numpy as np
-from scipy import ndimage
-
 from mrs_nav.geometry import format_point
-from mrs_nav.maps.occupancy_grid import UNKNOWN, OccupancyGrid
+from mrs_nav.maps.admissible import grid_refusal
+from mrs_nav.maps.occupancy_grid import OccupancyGrid
 
 
 class GoalState(Enum):
@@ -69,34 +67,8 @@ def goal_refusal(
         return "its heading is not a finite number"
     if grid is None or raw is None:
         return "no map received yet"
-    goal = np.array([[x, y]])
-    _, _, inside = grid.cells_of(goal)
-    if not inside[0]:
-        return "it lies outside the map"
-    if raw.is_occupied(goal)[0]:
-        return "it lies inside an obstacle"
-    if grid.is_occupied(goal)[0]:
-        return f"it lies within {inflation_m:.3f} m (robot radius + margin) of an obstacle"
-    if not grid.is_free(goal)[0]:
-        return "it lies in unknown space and allow_unknown is off"
-    if enclosed_unknown(raw, x, y):
-        return "it lies in unknown space enclosed by obstacles (the inside of an obstacle)"
-    return None
-
-
-def enclosed_unknown(raw: OccupancyGrid, x: float, y: float) -> bool:
-    """Whether ``(x, y)`` lies in an unknown region of ``raw`` that touches neither a free cell nor the edge of
-    the map: the unseen inside of an obstacle, which ``allow_unknown`` must not make a goal."""
-    rows, cols, inside = raw.cells_of(np.array([[x, y]]))
-    unknown = raw.values == UNKNOWN
-    if not inside[0] or not unknown[rows[0], cols[0]]:
-        return False
-    labels, _ = ndimage.label(unknown)  # 4-connected: a diagonal gap in a wall does not open it
-    region = labels == labels[rows[0], cols[0]]
-    if region[0, :].any() or region[-1, :].any() or region[:, 0].any() or region[:, -1].any():
-        return False
-    rim = ndimage.binary_dilation(region) & ~region
-    return not bool(np.any(raw.free_mask[rim]))
+    why = grid_refusal(grid, x, y, raw=raw, inflation_m=inflation_m, unknown_hint=" and allow_unknown is off")
+    return None if why is None else f"it lies {why}"
 
 
 class GoalTracker:

@@ -23,6 +23,7 @@ import numpy as np
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D
+from mrs_nav.maps.admissible import grid_refusal
 from mrs_nav.maps.occupancy_grid import IntArray, OccupancyGrid
 from mrs_nav.planning import PlanResult, path_length
 from mrs_nav.trees import arcs
@@ -72,27 +73,12 @@ def check_budget(iterations: int | None, time_budget: float | None) -> None:
         raise InvalidInputError(f"time budget must be finite and >= 0 s, got {time_budget}")
 
 
-def describe_point(grid: OccupancyGrid, point: FloatArray) -> str | None:
-    """Why ``point`` cannot be a start or goal (outside the map, unknown, in or too near an obstacle), or None."""
-    rows, cols, inside = grid.cells_of(point[:2])
-    if not inside[0]:
-        return "is outside the map"
-    value = int(grid.values[rows[0], cols[0]])
-    if grid.free_mask[rows[0], cols[0]]:
-        return None
-    if value < 0:
-        return "is in unknown space"
-    return "is in an obstacle (or within the robot radius of one)"
-
-
 def check_query(grid: OccupancyGrid, start: Pose2D, goal: FloatArray) -> None:
-    """Raise :class:`InvalidInputError` naming the problem when the start or goal is not in free space."""
+    """Raise :class:`InvalidInputError` naming the problem when the start or goal is not admissible on ``grid``."""
     for what, point in (("start", start.position), ("goal", goal)):
-        if not np.all(np.isfinite(point)):
-            raise InvalidInputError(f"{what} must be finite, got {tuple(point)}")
-        why = describe_point(grid, point)
+        why = grid_refusal(grid, float(point[0]), float(point[1]))
         if why:
-            raise InvalidInputError(f"{what} ({point[0]:.3f}, {point[1]:.3f}) {why}")
+            raise InvalidInputError(f"{what} ({point[0]:.3f}, {point[1]:.3f}) is {why}")
 
 
 def sample_random_position(
