@@ -37,7 +37,7 @@ from mrs_nav.maps.occupancy_grid import BoolArray, OccupancyGrid
 from mrs_nav.maps.rasterize import rasterize_world
 from mrs_nav.maps.wavefront import wavefront
 from mrs_nav.maps.world import Box, World, load_world
-from mrs_nav.navigation.navigator import GoalState, Navigator, NavigatorConfig, rrt_planner
+from mrs_nav.navigation.navigator import GoalState, NavGoal, Navigator, NavigatorConfig, rrt_planner
 from mrs_nav.navigation.obstacles import beam_ends
 from mrs_nav.options import budget_option, optional_runs_option, runs_option
 from mrs_nav.planning import path_length
@@ -370,7 +370,7 @@ def known_map_run(
     outcomes = []
     for x, y, yaw in goals:
         t0 = sim.time
-        navigator.set_goal(x, y, t0, yaw)
+        navigator.set_goal(NavGoal(x, y, yaw), t0)
         while navigator.state is GoalState.ACTIVE and sim.time - t0 < goal_timeout_s:
             command = navigator.update(sim.ground_truth(), sim.time)
             sim.set_command(command.u, command.omega)

@@ -13,7 +13,8 @@ import math
 from dataclasses import dataclass
 from enum import Enum
 
-from mrs_nav.geometry import format_point
+from mrs_nav.errors import InvalidInputError
+from mrs_nav.geometry import Pose2D, format_point
 from mrs_nav.maps.admissible import grid_refusal
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 
@@ -56,18 +57,47 @@ class NavEvent:
     message: str
 
 
+@dataclass(frozen=True)
+class NavGoal:
+    """A goal in the map frame: the position ``(x, y)`` (m) and the heading ``yaw`` (rad) to end with, None when
+    any will do.
+
+    Made once where a goal enters (the ROS adapter converts its message into one, the demo and the bench build
+    theirs) and passed down unchanged; finite by construction, so nothing below checks that again.
+    """
+
+    x: float
+    y: float
+    yaw: float | None = None
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.x) and math.isfinite(self.y)):
+            raise InvalidInputError(f"goal ({self.x}, {self.y}): its position is not a finite number")
+        if self.yaw is not None and not math.isfinite(self.yaw):
+            raise InvalidInputError(f"goal {format_point(self.x, self.y)}: its heading is not a finite number")
+
+    @property
+    def position(self) -> tuple[float, float]:
+        return (self.x, self.y)
+
+    def seen_from(self, frame: Pose2D) -> NavGoal:
+        """This goal, given in a frame whose pose is ``frame``, expressed in the frame ``frame`` is given in."""
+        pose = frame.compose(Pose2D(self.x, self.y, 0.0 if self.yaw is None else self.yaw))
+        return NavGoal(pose.x, pose.y, None if self.yaw is None else pose.yaw)
+
+    def describe(self) -> str:
+        heading = "" if self.yaw is None else f", heading {self.yaw:.2f} rad"
+        return f"goal {format_point(self.x, self.y)}{heading}"
+
+
 def goal_refusal(
-    raw: OccupancyGrid | None, grid: OccupancyGrid | None, x: float, y: float, *, yaw: float | None, inflation_m: float
+    raw: OccupancyGrid | None, grid: OccupancyGrid | None, goal: NavGoal, *, inflation_m: float
 ) -> str | None:
-    """Why the goal ``(x, y)`` (heading ``yaw``, None for any) must be refused on the map ``raw`` planned on as
-    ``grid`` (inflated by ``inflation_m``, unknown made free when allowed), or None when it may be tried."""
-    if not (math.isfinite(x) and math.isfinite(y)):
-        return "its position is not a finite number"
-    if yaw is not None and not math.isfinite(yaw):
-        return "its heading is not a finite number"
+    """Why ``goal`` must be refused on the map ``raw`` planned on as ``grid`` (inflated by ``inflation_m``,
+    unknown made free when allowed), or None when it may be tried."""
     if grid is None or raw is None:
         return "no map received yet"
-    why = grid_refusal(grid, x, y, raw=raw, inflation_m=inflation_m, unknown_hint=" and allow_unknown is off")
+    why = grid_refusal(grid, goal.x, goal.y, raw=raw, inflation_m=inflation_m, unknown_hint=" and allow_unknown is off")
     return None if why is None else f"it lies {why}"
 
 
@@ -76,8 +106,7 @@ class GoalTracker:
 
     def __init__(self) -> None:
         self.state = GoalState.IDLE
-        self.goal: tuple[float, float] | None = None
-        self.yaw: float | None = None  # the goal heading (rad), None when any will do
+        self.goal: NavGoal | None = None
 
     @property
     def active(self) -> bool:
@@ -85,18 +114,16 @@ class GoalTracker:
 
     def describe(self) -> str:
         assert self.goal is not None
-        return f"goal {format_point(*self.goal)}"
+        return f"goal {format_point(self.goal.x, self.goal.y)}"
 
-    def accept(self, x: float, y: float, yaw: float | None = None) -> list[NavEvent]:
-        """Make ``(x, y)`` (heading ``yaw``) the active goal; the events (a preemption first, if any)."""
+    def accept(self, goal: NavGoal) -> list[NavEvent]:
+        """Make ``goal`` the active goal; the events (a preemption first, if any)."""
         events = []
         if self.active:
             events.append(NavEvent(EventKind.PREEMPTED, f"{self.describe()} preempted by a new goal"))
-        self.goal = (float(x), float(y))
-        self.yaw = None if yaw is None else float(yaw)
+        self.goal = goal
         self.state = GoalState.ACTIVE
-        heading = "" if yaw is None else f", heading {yaw:.2f} rad"
-        events.append(NavEvent(EventKind.ACCEPTED, f"goal {format_point(x, y)}{heading} accepted"))
+        events.append(NavEvent(EventKind.ACCEPTED, f"{goal.describe()} accepted"))
         return events
 
     def cancel(self) -> list[NavEvent]:
@@ -109,5 +136,4 @@ class GoalTracker:
     def end(self, state: GoalState) -> None:
         """End the active goal in ``state``."""
         self.goal = None
-        self.yaw = None
         self.state = state
