@@ -26,7 +26,18 @@ class BagError(MrsNavError):
 
 
 class NoPathFoundError(MrsNavError):
-    """A planner used its budget without reaching the goal."""
+    """A planner ended without a path to the goal: its budget was used up, or the obstacles close the goal off.
+
+    The message is the reason. ``time_s`` (s), ``iterations`` and ``nodes`` tell what the search spent before it
+    gave up (0 when it gave up before searching), for the command line and benchmarks; there is no path.
+    """
+
+    def __init__(self, reason: str, *, time_s: float = 0.0, iterations: int = 0, nodes: int = 0) -> None:
+        super().__init__(reason)
+        self.reason = reason
+        self.time_s = time_s
+        self.iterations = iterations
+        self.nodes = nodes
 
 
 class OutputFileError(MrsNavError):

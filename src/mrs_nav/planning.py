@@ -1,5 +1,8 @@
 """The result every planner returns (potential field, RRT, RRT*), and path helpers.
 
+A planner that ends without reaching the goal raises :class:`~mrs_nav.errors.NoPathFoundError` (with the reason
+and what it spent) instead of returning: a :class:`PlanResult` always holds a path from the start to the goal.
+
 A path is an ``(N, 3)`` float array of waypoints ``(x, y, yaw)`` in metres and radians, in the frame of the
 obstacles or map it was planned on. Its length is the sum of the Euclidean lengths of its segments,
 ``L = sum_k |p_{k+1} - p_k|`` over the positions ``p_k = (x_k, y_k)``; yaw does not count.
@@ -45,27 +48,25 @@ def headings_along(points: npt.ArrayLike, final_yaw: float | None = None) -> Flo
 class PlanResult:
     """Outcome of one planning query.
 
-    ``path`` holds the waypoints ``(x, y, yaw)`` from start towards the goal (the best partial path when
-    ``success`` is false, possibly just the start). ``length_m`` is :func:`path_length` of ``path``;
-    ``time_s`` the wall-clock planning time; ``first_solution_s`` the time at which a first path reaching the
-    goal was known (``None`` when none was found); ``iterations`` the planner's steps (field integration steps
-    or tree expansions); ``nodes`` the vertices kept (trajectory points or tree size); ``reason`` a short
-    human-readable explanation (e.g. ``"goal reached"``, ``"time budget used up"``).
+    ``path`` holds the waypoints ``(x, y, yaw)`` from the start to the goal. ``length_m`` is :func:`path_length`
+    of ``path``; ``time_s`` the wall-clock planning time; ``first_solution_s`` the time at which a first path
+    reaching the goal was known; ``iterations`` the planner's steps (field integration steps or tree expansions);
+    ``nodes`` the vertices kept (trajectory points or tree size); ``reason`` a short human-readable explanation
+    (``"goal reached"``, or ``"best path within budget"`` for RRT*, which improves its path until the budget ends).
     """
 
-    success: bool
     path: FloatArray
     length_m: float
     time_s: float
-    first_solution_s: float | None
+    first_solution_s: float
     iterations: int
     nodes: int
     reason: str
 
     def to_json(self) -> dict[str, object]:
-        """The JSON form printed by ``mrs-nav plan --json``."""
+        """The JSON form printed by ``mrs-nav plan --json`` (``success`` is always true: a failure raises)."""
         return {
-            "success": self.success,
+            "success": True,
             "length_m": self.length_m,
             "time_s": self.time_s,
             "first_solution_s": self.first_solution_s,

@@ -84,3 +84,21 @@ def test_laser_scan_keeps_rep_117_readings_and_geometry() -> None:
     assert back[0] == math.inf
     assert back[1] == -math.inf
     assert conv.valid_ranges(msg, back).sum() == params.beams - 2
+
+
+def test_a_goal_message_is_converted_once_into_a_finite_goal_with_or_without_a_heading() -> None:
+    tf2_ros = pytest.importorskip("tf2_ros")
+    from geometry_msgs.msg import PoseStamped
+
+    nav = pytest.importorskip("mrs_nav.ros.navigation_conversions")
+    buffer = tf2_ros.Buffer(debug=False)  # no tf2_frames service: no master needed
+    msg = PoseStamped()
+    msg.header.frame_id = "map"
+    msg.pose = conv.pose_msg(Pose2D(1.0, -2.0, 0.5))
+    goal = nav.goal_in_frame(buffer, msg, "map")
+    assert (goal.x, goal.y, goal.yaw) == pytest.approx((1.0, -2.0, 0.5))
+    msg.pose.orientation.z = msg.pose.orientation.w = 0.0  # the all-zero quaternion: a goal sent without a heading
+    assert nav.goal_in_frame(buffer, msg, "map").yaw is None
+    msg.pose.position.x = math.nan
+    with pytest.raises(InvalidInputError, match="its position is not a finite number"):
+        nav.goal_in_frame(buffer, msg, "map")

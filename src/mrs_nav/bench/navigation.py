@@ -4,7 +4,7 @@ Each run is :class:`mrs_nav.stack.demo.Demo` with one goal: the robot starts wit
 the navigator plans through unknown space. A run succeeds when the navigator reports the goal reached, the
 true pose is within 0.2 m of the goal and the robot never touched anything. Reported per world: success rate,
 time to goal (sim s), distance travelled against the shortest collision-free path (the true map inflated by the
-robot radius, Dijkstra on its cells then shortcut by line of sight), cross-track RMS (true position to the path
+robot radius, the library's wavefront on its cells then its shortcutting), cross-track RMS (true position to the path
 being followed), the SLAM pose error and the real-time factor of the whole stack.
 
 Then (unless ``--ros-runs 0``) the same goals through the real ROS stack: a roscore on a free port,
@@ -23,20 +23,21 @@ import subprocess
 import sys
 import tempfile
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import dijkstra
 from tqdm import tqdm
 
-from mrs_nav.errors import InvalidInputError, NoPathFoundError
+from mrs_nav.errors import InvalidInputError
+from mrs_nav.fields.path_simplification import simplify_path
 from mrs_nav.geometry import FloatArray, Pose2D, wrap_angle
-from mrs_nav.maps.occupancy_grid import OccupancyGrid
+from mrs_nav.maps.occupancy_grid import BoolArray, OccupancyGrid
 from mrs_nav.maps.rasterize import rasterize_world
+from mrs_nav.maps.wavefront import wavefront
 from mrs_nav.maps.world import Box, World, load_world
-from mrs_nav.navigation.navigator import GoalState, Navigator, NavigatorConfig, cell_centres, densify, rrt_planner
+from mrs_nav.navigation.navigator import GoalState, NavGoal, Navigator, NavigatorConfig, rrt_planner
 from mrs_nav.navigation.obstacles import beam_ends
 from mrs_nav.options import budget_option, optional_runs_option, runs_option
 from mrs_nav.planning import path_length
@@ -171,49 +172,44 @@ def ros_section(names: list[str], runs: int) -> str:
 def shortest_path_length(
     world: World, start: Pose2D, goal: tuple[float, float], radius: float = BURGER_RADIUS
 ) -> float:
-    """Length (m) of a near-shortest collision-free path for a disc of ``radius`` (8-connected Dijkstra on a
-    0.05 m rasterisation, then shortcut by line of sight: within a few centimetres of the true shortest)."""
+    """Length (m) of a near-shortest collision-free path for a disc of ``radius``: the library's wavefront
+    (8-connected Dijkstra on a 0.05 m rasterisation, a diagonal step only where both cells of the corner it cuts are
+    free) then its shortcutting (:func:`~mrs_nav.fields.path_simplification.simplify_path`, segments checked every
+    half cell); within a few centimetres of the true shortest."""
     grid = rasterize_world(world, 0.05, margin=0.5).inflate(radius)
-    free = grid.free_mask
-    h, w = free.shape
-    index = np.arange(h * w).reshape(h, w)
-    rows, cols, weights = [], [], []
-    for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
-        lo, hi = max(0, -dc), w - max(0, dc)  # source columns whose neighbour (r + dr, c + dc) exists
-        both = free[: h - dr, lo:hi] & free[dr:, lo + dc : hi + dc]
-        rows.append(index[: h - dr, lo:hi][both])
-        cols.append(index[dr:, lo + dc : hi + dc][both])
-        weights.append(np.full(int(both.sum()), math.hypot(dr, dc) * grid.resolution))
-    graph = coo_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))), shape=(h * w, h * w))
-    (sr, gr), (sc, gc), inside = grid.cells_of(np.array([[start.x, start.y], goal]))
-    if not (inside.all() and free[sr, sc] and free[gr, gc]):
+    if not grid.is_free(np.array([[start.x, start.y], goal])).all():
         raise InvalidInputError("benchmark start or goal is not free in the world")
-    _, predecessors = dijkstra(graph.tocsr(), directed=False, indices=int(index[sr, sc]), return_predecessors=True)
-    node, cells = int(index[gr, gc]), []
-    while node >= 0:
-        cells.append(node)
-        node = int(predecessors[node])
-    if cells[-1] != index[sr, sc]:
-        raise NoPathFoundError("no collision-free path between the benchmark start and goal")
-    cells.reverse()
-    points = cell_centres(grid, np.array(cells) // w, np.array(cells) % w)
-    points[0], points[-1] = (start.x, start.y), goal
-    return path_length(_shortcut(points, grid))
+    corridor = wavefront(grid, goal, cell_m=grid.resolution).corridor([start.x, start.y])
+    return path_length(simplify_path(corridor, partial(_segments_free, grid)))
 
 
-def _shortcut(points: FloatArray, grid: OccupancyGrid) -> FloatArray:
-    """Greedy line-of-sight shortcutting: from each kept point jump to the farthest point visible from it."""
-    kept, i = [points[0]], 0
-    while i < len(points) - 1:
-        j = len(points) - 1
-        while j > i + 1 and not np.all(grid.is_free(densify(points[[i, j]], grid.resolution / 2.0))):
-            j -= 1
-        kept.append(points[j])
-        i = j
-    return np.array(kept)
+def _segments_free(grid: OccupancyGrid, starts: FloatArray, ends: FloatArray) -> BoolArray:
+    """Whether each straight segment ``starts[i] -> ends[i]`` crosses only free cells of ``grid`` (sampled at
+    least every half cell, both ends included)."""
+    step = grid.resolution / 2.0
+    counts = np.maximum(np.ceil(np.hypot(*(ends - starts).T) / step).astype(np.intp), 1) + 1
+    segment = np.repeat(np.arange(len(starts)), counts)
+    first = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    t = (np.arange(int(counts.sum())) - first[segment]) / (counts[segment] - 1)
+    points = starts[segment] + t[:, None] * (ends - starts)[segment]
+    out: BoolArray = np.logical_and.reduceat(grid.is_free(points), first)
+    return out
 
 
 def run(args: argparse.Namespace) -> str:
+    names = _world_names(args)
+    stack = stack_section(names, args.seeds, args.time_budget) if args.seeds else ""
+    goals = []
+    if args.accuracy_seeds:
+        goals.append(goal_accuracy_section(args.accuracy_seeds, args.time_budget))
+    if args.obstacle_seeds or args.office_obstacle_seeds:
+        goals.append(obstacle_section(args.obstacle_seeds, args.office_obstacle_seeds, args.time_budget))
+    ros = ros_section(names, args.ros_runs) if args.ros_runs else ""
+    return "\n\n".join(part for part in (stack, *goals, ros) if part)
+
+
+def _world_names(args: argparse.Namespace) -> list[str]:
+    """The worlds of ``--worlds``, after checking every count option is >= 0."""
     for option in ("seeds", "ros_runs", "accuracy_seeds", "obstacle_seeds", "office_obstacle_seeds"):
         if getattr(args, option) < 0:
             raise InvalidInputError(f"--{option.replace('_', '-')} must be >= 0, got {getattr(args, option)}")
@@ -223,6 +219,11 @@ def run(args: argparse.Namespace) -> str:
         raise InvalidInputError(
             f"--worlds: unknown {unknown or args.worlds!r}; expected some of {', '.join(SCENARIOS)}"
         )
+    return names
+
+
+def stack_section(names: list[str], seeds: int, time_budget: float) -> str:
+    """Markdown: the whole stack in one process, ``seeds`` runs per world."""
     header = [
         "world",
         "runs",
@@ -235,67 +236,61 @@ def run(args: argparse.Namespace) -> str:
         "SLAM ATE median (m)",
         "real-time factor median",
     ]
-    rows: list[list[object]] = []
-    bar = tqdm(total=args.seeds * len(names), unit="run", file=sys.stderr, disable=not sys.stderr.isatty())
-    for name in names:
-        scenario = SCENARIOS[name]
-        world = load_world(WORLDS_DIR / scenario.world)
-        shortest = shortest_path_length(world, scenario.start, scenario.goal)
-        successes, contacts, times, ratios, cross, final, ate, rtf = 0, 0, [], [], [], [], [], []
-        for seed in range(args.seeds):
-            config = DemoConfig(
-                start=scenario.start, goals=(scenario.goal,), seed=seed, plan_time_budget_s=args.time_budget
-            )
-            result = Demo(world, config).run()
-            (outcome,) = result.outcomes
-            ok = outcome.state == "reached" and outcome.distance_m <= 0.2 and result.collisions == 0
-            successes += ok
-            contacts += result.collisions
-            final.append(outcome.distance_m)
-            ate.append(result.ate_rmse_m)
-            rtf.append(result.sim_time_s / result.wall_time_s)
-            if outcome.state == "reached":
-                times.append(outcome.time_s)
-                # the robot stops up to 0.2 m short of the goal: count the rest as if driven straight
-                ratios.append((outcome.travelled_m + outcome.distance_m) / shortest)
-            if result.cross_track_m.size:
-                cross.append(float(np.sqrt(np.mean(result.cross_track_m**2))))
-            bar.update(1)
-        rows.append(
-            [
-                f"{name} ({scenario.start.x:g}, {scenario.start.y:g}) -> {scenario.goal}, shortest {shortest:.2f} m",
-                args.seeds,
-                f"{successes}/{args.seeds}",
-                contacts,
-                _median(times),
-                _median(ratios),
-                _median(cross),
-                _median(final),
-                _median(ate),
-                _median(rtf),
-            ]
-        )
+    bar = tqdm(total=seeds * len(names), unit="run", file=sys.stderr, disable=not sys.stderr.isatty())
+    rows = [_stack_row(name, seeds, time_budget, bar) for name in names]
     bar.close()
-    goals = []
-    if args.accuracy_seeds:
-        goals.append(goal_accuracy_section(args.accuracy_seeds, args.time_budget))
-    if args.obstacle_seeds or args.office_obstacle_seeds:
-        goals.append(obstacle_section(args.obstacle_seeds, args.office_obstacle_seeds, args.time_budget))
-    stack = (
-        ""
-        if not args.seeds
-        else (
-            "Whole stack in one process (`mrs_nav.stack.demo`): ODE simulator at 100 Hz with the 5 Hz laser, SLAM, "
-            f"RRT* ({args.time_budget} s per plan) through unknown space, path follower at 10 Hz; no map at the start. "
-            "Success = navigator reports the goal reached, true pose within 0.2 m, no contact. "
-            "Final error and ATE use the true pose (ATE: SLAM pose against ground truth in the shared map/world "
-            "frame, no alignment). Path ratio: true distance travelled plus the straight rest to the goal, over the "
-            "shortest collision-free path. Real-time factor: sim time / wall time of the whole run, measured while "
-            "other jobs shared the two cores.\n\n" + markdown_table(header, rows)
-        )
+    return (
+        "Whole stack in one process (`mrs_nav.stack.demo`): ODE simulator at 100 Hz with the 5 Hz laser, SLAM, "
+        f"RRT* ({time_budget} s per plan) through unknown space, path follower at 10 Hz; no map at the start. "
+        "Success = navigator reports the goal reached, true pose within 0.2 m, no contact. "
+        "Final error and ATE use the true pose (ATE: SLAM pose against ground truth in the shared map/world "
+        "frame, no alignment). Path ratio: true distance travelled plus the straight rest to the goal, over the "
+        "shortest collision-free path. Real-time factor: sim time / wall time of the whole run, measured while "
+        "other jobs shared the two cores.\n\n" + markdown_table(header, rows)
     )
-    ros = ros_section(names, args.ros_runs) if args.ros_runs else ""
-    return "\n\n".join(part for part in (stack, *goals, ros) if part)
+
+
+def _stack_row(name: str, seeds: int, time_budget: float, bar: tqdm[Any]) -> list[object]:
+    """One world's row of :func:`stack_section`."""
+    scenario = SCENARIOS[name]
+    world = load_world(WORLDS_DIR / scenario.world)
+    shortest = shortest_path_length(world, scenario.start, scenario.goal)
+    successes, contacts = 0, 0
+    times: list[float] = []
+    ratios: list[float] = []
+    cross: list[float] = []
+    final: list[float] = []
+    ate: list[float] = []
+    rtf: list[float] = []
+    for seed in range(seeds):
+        config = DemoConfig(start=scenario.start, goals=(scenario.goal,), seed=seed, plan_time_budget_s=time_budget)
+        result = Demo(world, config).run()
+        (outcome,) = result.outcomes
+        ok = outcome.state == "reached" and outcome.distance_m <= 0.2 and result.collisions == 0
+        successes += ok
+        contacts += result.collisions
+        final.append(outcome.distance_m)
+        ate.append(result.ate_rmse_m)
+        rtf.append(result.sim_time_s / result.wall_time_s)
+        if outcome.state == "reached":
+            times.append(outcome.time_s)
+            # the robot stops up to 0.2 m short of the goal: count the rest as if driven straight
+            ratios.append((outcome.travelled_m + outcome.distance_m) / shortest)
+        if result.cross_track_m.size:
+            cross.append(float(np.sqrt(np.mean(result.cross_track_m**2))))
+        bar.update(1)
+    return [
+        f"{name} ({scenario.start.x:g}, {scenario.start.y:g}) -> {scenario.goal}, shortest {shortest:.2f} m",
+        seeds,
+        f"{successes}/{seeds}",
+        contacts,
+        _median(times),
+        _median(ratios),
+        _median(cross),
+        _median(final),
+        _median(ate),
+        _median(rtf),
+    ]
 
 
 def _median(values: list[float]) -> float:
@@ -375,7 +370,7 @@ def known_map_run(
     outcomes = []
     for x, y, yaw in goals:
         t0 = sim.time
-        navigator.set_goal(x, y, t0, yaw)
+        navigator.set_goal(NavGoal(x, y, yaw), t0)
         while navigator.state is GoalState.ACTIVE and sim.time - t0 < goal_timeout_s:
             command = navigator.update(sim.ground_truth(), sim.time)
             sim.set_command(command.u, command.omega)

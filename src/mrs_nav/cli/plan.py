@@ -2,7 +2,8 @@
 
 Exit status: 0 when the goal is reached, 2 when it is not (the planner's reason on stderr), 1 on bad input.
 Planners are looked up in :data:`PLANNERS`: a name on the command line -> a function of the parsed
-arguments, the start pose and the goal returning a :class:`~mrs_nav.planning.PlanResult`.
+arguments, the start pose and the goal returning a :class:`~mrs_nav.planning.PlanResult`, or raising
+:class:`~mrs_nav.errors.NoPathFoundError` when it does not reach the goal.
 """
 
 from __future__ import annotations
@@ -17,11 +18,12 @@ import numpy as np
 from mrs_nav.atomic_write import check_not_inputs, final_target
 from mrs_nav.cli import tree_planners
 from mrs_nav.cli.common import fail, print_json
-from mrs_nav.errors import InvalidInputError
+from mrs_nav.errors import InvalidInputError, NoPathFoundError
 from mrs_nav.fields.potential_field import DEFAULT_GOAL_FADE, Bounds, PotentialField, workspace_bounds
 from mrs_nav.fields.randomized_potential_field import EscapeSettings, plan_potential_field
 from mrs_nav.geometry import Pose2D
 from mrs_nav.limits import MAX_ITERATIONS, MAX_ROBOT_RADIUS_M, MAX_SEED, MAX_SIZE_M
+from mrs_nav.maps.admissible import obstacles_refusal
 from mrs_nav.maps.obstacles import Obstacles
 from mrs_nav.maps.world import load_world
 from mrs_nav.options import count_option, number_option, parse_floats, radius_option, seed_option
@@ -58,16 +60,9 @@ def check_free(
 ) -> None:
     """Raise :class:`InvalidInputError` when ``(x, y)`` is outside ``bounds``, inside an obstacle or, for a
     robot of ``robot_radius`` (m), close enough to one that the robot would overlap it."""
-    if bounds is not None and not (bounds[0] <= x <= bounds[2] and bounds[1] <= y <= bounds[3]):
-        raise InvalidInputError(
-            f"{what} ({x}, {y}) is outside the world [{bounds[0]:g}, {bounds[2]:g}] x [{bounds[1]:g}, {bounds[3]:g}]"
-        )
-    if obstacles.contains((x, y))[0]:
-        raise InvalidInputError(f"{what} ({x}, {y}) is inside an obstacle")
-    if robot_radius > 0.0 and obstacles.inflated(robot_radius).contains((x, y))[0]:
-        raise InvalidInputError(
-            f"{what} ({x}, {y}) is within --robot-radius {robot_radius:g} m of an obstacle: the robot would overlap it"
-        )
+    why = obstacles_refusal(obstacles, x, y, bounds=bounds, clearance_m=robot_radius, clearance_name="--robot-radius")
+    if why:
+        raise InvalidInputError(f"{what} ({x}, {y}) is {why}")
 
 
 def plan_with_potential_field(args: argparse.Namespace, start: Pose2D, goal: tuple[float, float]) -> PlanResult:
@@ -158,7 +153,14 @@ def run(args: argparse.Namespace) -> int:
     start_values = parse_floats(args.start, (2, 3), "--start")
     start = Pose2D(*start_values)
     gx, gy = parse_floats(args.goal, 2, "--goal")
-    result = PLANNERS[args.planner](args, start, (gx, gy))
+    try:
+        result = PLANNERS[args.planner](args, start, (gx, gy))
+    except NoPathFoundError as err:
+        if args.json:
+            print_json(no_path_json(err))
+        else:
+            print(f"{args.planner}: {err.reason} in {err.time_s * 1000:.1f} ms ({err.iterations} iterations)")
+        return fail(f"goal not reached: {err.reason}", 2)
     if args.json:
         print_json(result.to_json())
     else:
@@ -166,6 +168,18 @@ def run(args: argparse.Namespace) -> int:
             f"{args.planner}: {result.reason}; {result.length_m:.3f} m through {result.path.shape[0]} waypoints "
             f"in {result.time_s * 1000:.1f} ms ({result.iterations} iterations)"
         )
-    if not result.success:
-        return fail(f"goal not reached: {result.reason}", 2)
     return 0
+
+
+def no_path_json(err: NoPathFoundError) -> dict[str, object]:
+    """The ``--json`` object of a query that found no path: the keys of :meth:`PlanResult.to_json`, no path."""
+    return {
+        "success": False,
+        "length_m": 0.0,
+        "time_s": err.time_s,
+        "first_solution_s": None,
+        "iterations": err.iterations,
+        "nodes": err.nodes,
+        "reason": err.reason,
+        "path": [],
+    }

@@ -1,13 +1,15 @@
 """The RRT and RRT* planners of ``mrs-nav plan``: their options, map loading and optional PNG.
 
 ``mrs-nav plan`` looks planners up by name; :data:`TREE_PLANNERS` holds these two, each a function of the
-parsed arguments, the start pose and the goal returning a :class:`~mrs_nav.planning.PlanResult`.
+parsed arguments, the start pose and the goal returning a :class:`~mrs_nav.planning.PlanResult` (or raising
+:class:`~mrs_nav.errors.NoPathFoundError`; ``--png`` draws the tree either way).
 """
 
 from __future__ import annotations
 
 import argparse
 from collections.abc import Callable
+from functools import partial
 
 import numpy as np
 
@@ -22,7 +24,7 @@ from mrs_nav.options import budget_option, count_option, number_option
 from mrs_nav.planning import PlanResult
 from mrs_nav.trees.rrt import RRTConfig, grow_rrt
 from mrs_nav.trees.rrt_star import RRTStarConfig, grow_rrt_star
-from mrs_nav.trees.tree import Search
+from mrs_nav.trees.tree import ArcTree, NoPathInTreeError, Search
 
 #: RRT* runs for this long when neither --time-budget nor --iterations is given (seconds).
 DEFAULT_STAR_BUDGET = 0.5
@@ -79,7 +81,7 @@ def _inflated(args: argparse.Namespace) -> tuple[OccupancyGrid, OccupancyGrid]:
 
 def _finish(
     args: argparse.Namespace,
-    search: Search,
+    grow: Callable[[], Search],
     *,
     grid: OccupancyGrid,
     planning: OccupancyGrid,
@@ -87,10 +89,20 @@ def _finish(
     goal: tuple[float, float],
     title: str,
 ) -> PlanResult:
-    if args.png is not None:
-        from mrs_nav.figures.tree_drawing import draw_search  # noqa: PLC0415 - matplotlib only when drawing
+    """Run ``grow`` and, with ``--png``, draw its tree (and path, when it found one)."""
 
-        draw_search(search, grid, planning, start=start, goal=np.array(goal), title=title, out=args.png)
+    def draw(tree: ArcTree, result: PlanResult | None) -> None:
+        if args.png is not None:
+            from mrs_nav.figures.tree_drawing import draw_search  # noqa: PLC0415 - matplotlib only when drawing
+
+            draw_search(tree, result, grid, planning, start=start, goal=np.array(goal), title=title, out=args.png)
+
+    try:
+        search = grow()
+    except NoPathInTreeError as err:
+        draw(err.tree, None)
+        raise
+    draw(search.tree, search.result)
     return search.result
 
 
@@ -98,16 +110,16 @@ def plan_with_rrt(args: argparse.Namespace, start: Pose2D, goal: tuple[float, fl
     grid, planning = _inflated(args)
     iterations = args.iterations if args.iterations is not None or args.time_budget is not None else 2000
     config = RRTConfig(iterations=iterations, time_budget=args.time_budget, min_turning_radius=args.min_turning_radius)
-    search = grow_rrt(start, np.array(goal), planning, config, np.random.default_rng(args.seed))
-    return _finish(args, search, grid=grid, planning=planning, start=start, goal=goal, title=f"RRT (seed {args.seed})")
+    grow = partial(grow_rrt, start, np.array(goal), planning, config, np.random.default_rng(args.seed))
+    return _finish(args, grow, grid=grid, planning=planning, start=start, goal=goal, title=f"RRT (seed {args.seed})")
 
 
 def plan_with_rrt_star(args: argparse.Namespace, start: Pose2D, goal: tuple[float, float]) -> PlanResult:
     grid, planning = _inflated(args)
     budget = args.time_budget if args.time_budget is not None or args.iterations is not None else DEFAULT_STAR_BUDGET
     config = RRTStarConfig(iterations=args.iterations, time_budget=budget, min_turning_radius=args.min_turning_radius)
-    search = grow_rrt_star(start, np.array(goal), planning, config, np.random.default_rng(args.seed))
-    return _finish(args, search, grid=grid, planning=planning, start=start, goal=goal, title=f"RRT* (seed {args.seed})")
+    grow = partial(grow_rrt_star, start, np.array(goal), planning, config, np.random.default_rng(args.seed))
+    return _finish(args, grow, grid=grid, planning=planning, start=start, goal=goal, title=f"RRT* (seed {args.seed})")
 
 
 TREE_PLANNERS: dict[str, Callable[[argparse.Namespace, Pose2D, tuple[float, float]], PlanResult]] = {

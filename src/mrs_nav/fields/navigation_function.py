@@ -45,9 +45,9 @@ class NavigationFunction:
         """Geodesic distance to the goal (m) at ``(N, 2)`` points; ``inf`` in blocked or cut-off cells."""
         return self.wave.at(points)
 
-    def corridor(self, start: npt.ArrayLike) -> FloatArray | None:
-        """Points ``(K, 2)`` from ``start`` down the distance to the goal through cell centres, ``None`` when the
-        goal cannot be reached from ``start``'s cell."""
+    def corridor(self, start: npt.ArrayLike) -> FloatArray:
+        """Points ``(K, 2)`` from ``start`` down the distance to the goal through cell centres; raises
+        :class:`~mrs_nav.errors.NoPathFoundError` when the goal cannot be reached from ``start``'s cell."""
         return self.wave.corridor(start)
 
     def _cells(self, points: npt.ArrayLike) -> tuple[npt.NDArray[np.intp], npt.NDArray[np.bool_]]:

@@ -21,7 +21,8 @@ The point moves by explicit Euler steps ``x[t + dt] = x[t] + v dt`` in one of tw
   distance to the goal, which has no local minimum, and returns to best first once that distance is
   ``guide_margin`` below the distance at the worst trap so far *and* the goal is in straight sight. The guide
   never passes a gap the (grown) obstacles close; when it says the goal cannot be reached from the start at all
-  (e.g. behind a door narrower than the robot), every seed fails at once with the reason :data:`NO_PATH`.
+  (e.g. behind a door narrower than the robot), :func:`roll_out` raises :class:`NoPathFoundError` with the reason
+  :data:`NO_PATH` before any step.
 
 Steps that would enter an obstacle are refused (the point stays and, in a walk, draws a new heading), so
 the trajectory never crosses an obstacle even where the random walk's speed exceeds the field's.
@@ -40,12 +41,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mrs_nav.errors import InvalidInputError
+from mrs_nav.errors import InvalidInputError, NoPathFoundError
 from mrs_nav.fields.navigation_function import NavigationFunction
 from mrs_nav.fields.path_simplification import simplify_path
 from mrs_nav.fields.potential_field import PotentialField, cap, workspace_bounds
 from mrs_nav.geometry import FloatArray
+from mrs_nav.maps.admissible import obstacles_refusal
 from mrs_nav.maps.obstacles import BoolArray
+from mrs_nav.maps.occupancy_grid import IntArray
 from mrs_nav.planning import PlanResult, headings_along, path_length
 
 REACHED = "goal reached"
@@ -102,13 +105,16 @@ class EscapeSettings:
 class Rollout:
     """One seed's trajectory ``(K, 2)`` (not simplified), whether it reached the goal and why it stopped.
 
+    A rollout is the simulated descent, kept whole for figures and benchmarks even when it ends short of the goal;
+    the planner (:func:`plan_potential_field`) turns one that did not reach it into :class:`NoPathFoundError`.
+
     ``walking[k]`` tells whether step ``k -> k + 1`` was an escape step, random walk or guided (``(K - 1,)``).
     """
 
     seed: int
     trajectory: FloatArray
     walking: BoolArray
-    success: bool
+    reached: bool
     reason: str
     steps: int
     walk_steps: int
@@ -129,144 +135,194 @@ def roll_out(
     """Simulate the randomised descent from ``start`` once per seed, vectorised over the seeds.
 
     ``guide`` (built from ``field`` and ``start`` when not given) is used only when ``settings`` turn it on.
+    Raises :class:`NoPathFoundError` (:data:`NO_PATH`) when the guide says the goal cannot be reached from
+    ``start`` at all.
     """
-    s = settings
     if any(seed < 0 for seed in seeds):
         raise InvalidInputError(f"seeds must be >= 0, got {min(seeds)}")
     start_xy = np.asarray(start, dtype=np.float64)
-    if field.obstacles.contains(start_xy)[0]:
-        raise InvalidInputError(f"start ({start[0]}, {start[1]}) is inside an obstacle")
-    goal = np.asarray(field.goal, dtype=np.float64)
-    if s.guide_after_walks is None:
+    why = obstacles_refusal(field.obstacles, start[0], start[1])
+    if why:
+        raise InvalidInputError(f"start ({start[0]}, {start[1]}) is {why}")
+    if settings.guide_after_walks is None:
         guide = None
     elif guide is None:
         guide = navigation_guide(field, start)
     if guide is not None and not guide.reaches_goal(start_xy[None, :])[0]:
         # Refused before any step: no walk could get there, and the descent must not squeeze through.
-        return [
-            Rollout(int(seed), start_xy[None, :].copy(), np.zeros(0, dtype=bool), False, NO_PATH, 0, 0)
-            for seed in seeds
-        ]
-    n = len(seeds)
-    noise = np.empty((s.max_steps, n, 2))
-    turns = np.empty((s.max_steps, n))
-    heading = np.empty(n)
-    for i, seed in enumerate(seeds):
-        rng = np.random.default_rng(seed)
-        heading[i] = rng.uniform(-math.pi, math.pi)
-        noise[:, i] = rng.normal(0.0, s.noise_std, (s.max_steps, 2)) if s.noise_std > 0 else 0.0
-        turns[:, i] = rng.normal(0.0, s.walk_angle_std, s.max_steps)
-
-    guiding = np.zeros(n, dtype=bool)
-    walks = np.zeros(n, dtype=np.int64)
-    trap = np.full(n, math.inf)
-    guide_best = np.full(n, math.inf)  # the nearest to the goal (guide's distance) in the current guided phase
-    guide_idle = np.zeros(n, dtype=np.int64)  # guided steps since that improved
-    path = np.empty((s.max_steps + 1, n, 2))
-    path[0] = start_xy
-    walked = np.zeros((s.max_steps, n), dtype=bool)
-    x = np.repeat(start_xy[None, :], n, axis=0)
-    active = np.hypot(*(x - goal).T) > s.goal_tolerance
-    finished = np.where(active, -1, 0)
-    walking = np.zeros(n, dtype=bool)
-    walk_age = np.zeros(n, dtype=np.int64)
-    slow_for = np.zeros(n, dtype=np.int64)
-    reasons = ["" if a else REACHED for a in active]
-
-    for k in range(s.max_steps):
-        if not active.any():
+        raise NoPathFoundError(NO_PATH)
+    descent = _Descent(field, guide, settings, start_xy, seeds)
+    for k in range(settings.max_steps):
+        if not descent.active.any():
             break
-        idx = np.flatnonzero(active)
-        here = x[idx]
+        descent.step(k)
+    return descent.rollouts(seeds)
+
+
+class _Descent:
+    """The seeds of one :func:`roll_out` (every array holds one entry per seed) and the Euler step of the active ones.
+
+    Each seed's random draws are made up front, in the same order whatever the batch, so a seed's trajectory does
+    not depend on the others.
+    """
+
+    def __init__(
+        self,
+        field: PotentialField,
+        guide: NavigationFunction | None,
+        settings: EscapeSettings,
+        start_xy: FloatArray,
+        seeds: Sequence[int],
+    ) -> None:
+        s = settings
+        self.field, self.guide, self.s = field, guide, s
+        self.goal = np.asarray(field.goal, dtype=np.float64)
+        n = len(seeds)
+        self.noise = np.empty((s.max_steps, n, 2))
+        self.turns = np.empty((s.max_steps, n))
+        self.heading = np.empty(n)
+        for i, seed in enumerate(seeds):
+            rng = np.random.default_rng(seed)
+            self.heading[i] = rng.uniform(-math.pi, math.pi)
+            self.noise[:, i] = rng.normal(0.0, s.noise_std, (s.max_steps, 2)) if s.noise_std > 0 else 0.0
+            self.turns[:, i] = rng.normal(0.0, s.walk_angle_std, s.max_steps)
+        self.guiding = np.zeros(n, dtype=bool)
+        self.walks = np.zeros(n, dtype=np.int64)
+        self.trap = np.full(n, math.inf)
+        self.guide_best = np.full(n, math.inf)  # the nearest to the goal (guide's distance) in the current guided phase
+        self.guide_idle = np.zeros(n, dtype=np.int64)  # guided steps since that improved
+        self.path = np.empty((s.max_steps + 1, n, 2))
+        self.path[0] = start_xy
+        self.walked = np.zeros((s.max_steps, n), dtype=bool)
+        self.x = np.repeat(start_xy[None, :], n, axis=0)
+        self.active = np.hypot(*(self.x - self.goal).T) > s.goal_tolerance
+        self.finished = np.where(self.active, -1, 0)
+        self.walking = np.zeros(n, dtype=bool)
+        self.walk_age = np.zeros(n, dtype=np.int64)
+        self.slow_for = np.zeros(n, dtype=np.int64)
+        self.reasons = ["" if a else REACHED for a in self.active]
+
+    def step(self, k: int) -> None:
+        """Euler step ``k`` of every active seed: pick its mode, move it unless the step enters an obstacle, and
+        end it at the goal or (random walk off) after a long stall."""
+        s, field = self.s, self.field
+        idx = np.flatnonzero(self.active)
+        here = self.x[idx]
         uncapped = field.attractive(here) + field.repulsive(here)
         clean = cap(uncapped, field.max_speed)
-        stalled = (np.hypot(clean[:, 0], clean[:, 1]) < s.stall_speed) & (np.hypot(*(here - goal).T) > s.stall_distance)
-        slow_for[idx] = np.where(stalled, slow_for[idx] + 1, 0)
-        fresh = stalled & ~walking[idx] & ~guiding[idx]
-        if guide is not None and s.guide_after_walks is not None:
-            handed = fresh & (walks[idx] >= s.guide_after_walks)
-            guiding[idx[handed]] = True
-            guide_best[idx[handed]], guide_idle[idx[handed]] = math.inf, 0
-            trap[idx[handed]] = np.minimum(trap[idx[handed]], guide.distance(here[handed]))
-            fresh &= ~handed
-        if s.random_walk:
-            walking[idx[fresh]] = True
-            walk_age[idx[fresh]] = 0
-            walks[idx[fresh]] += 1
-        walk = walking[idx]
-        led = guiding[idx]
-        heading[idx[walk]] += turns[k, idx[walk]]
-        v = cap(uncapped + noise[k, idx], field.max_speed) if s.noise_std > 0 else clean
-        v[walk] = field.v_max * np.column_stack([np.cos(heading[idx[walk]]), np.sin(heading[idx[walk]])])
-        if guide is not None and led.any():
-            # Towards the wavefront target; where that step is blocked (a corner it would cut), towards the cell the
-            # point sees down the distance, and where even that is blocked, with the obstacles' push added, so that
-            # the point slides along the obstacle.
-            ahead = cap((guide.downhill(here[led]) - here[led]) / s.dt, field.max_speed)
-            direct = field.obstacles.segments_free(here[led], here[led] + s.dt * ahead)
-            near = cap((guide.downhill(here[led], 0) - here[led]) / s.dt, field.max_speed)
-            near_ok = field.obstacles.segments_free(here[led], here[led] + s.dt * near)
-            pushed = cap(ahead + field.repulsive(here[led]), field.max_speed)
-            v[led] = np.where(direct[:, None], ahead, np.where(near_ok[:, None], near, pushed))
+        self._switch_modes(idx, here, clean)
+        walk = self.walking[idx]
+        led = self.guiding[idx]
+        self.heading[idx[walk]] += self.turns[k, idx[walk]]
+        v = cap(uncapped + self.noise[k, idx], field.max_speed) if s.noise_std > 0 else clean
+        v[walk] = field.v_max * np.column_stack([np.cos(self.heading[idx[walk]]), np.sin(self.heading[idx[walk]])])
+        if self.guide is not None and led.any():
+            v[led] = self._guided_velocity(self.guide, here[led])
         proposed = here + s.dt * v
         ok = field.obstacles.segments_free(here, proposed)
         new = np.where(ok[:, None], proposed, here)
-        x[idx] = new
-        path[k + 1] = x
+        self.x[idx] = new
+        self.path[k + 1] = self.x
 
-        walked[k, idx[walk | led]] = True
-        walk_age[idx[walk]] += 1
-        if guide is not None and led.any():
-            ids, left = idx[led], guide.distance(new[led])
-            closer = left < trap[ids] - s.guide_margin
-            sight = field.obstacles.segments_free(new[led], np.repeat(goal[None, :], int(led.sum()), axis=0))
-            guiding[ids[closer & sight]] = False
-            # A guided point that stops getting closer (it dithers at a corner where the step to the target and
-            # the slide along the obstacle are both blocked, or sits in a gap narrower than the cells resolve,
-            # where the distance is unknown) would stay for good: it walks off and is guided at its next stall.
-            gained = left < guide_best[ids] - 1e-3
-            guide_best[ids] = np.where(gained, left, guide_best[ids])
-            guide_idle[ids] = np.where(gained, 0, guide_idle[ids] + 1)
-            lost = ids[guiding[ids] & (guide_idle[ids] > s.guide_patience)]
-            guiding[lost] = False
-            walking[lost] = s.random_walk
-            walk_age[lost] = 0
-            walks[lost] += 1
+        self.walked[k, idx[walk | led]] = True
+        self.walk_age[idx[walk]] += 1
+        if self.guide is not None and led.any():
+            self._end_guided_phases(self.guide, idx[led], new[led])
         if walk.any():
             moved = new[walk] - here[walk]
             downhill = np.einsum("ij,ij->i", moved, field.velocity(new[walk])) > 0.0
-            leave = downhill & (walk_age[idx[walk]] > s.min_walk_steps)
-            walking[idx[walk][leave]] = False
+            leave = downhill & (self.walk_age[idx[walk]] > s.min_walk_steps)
+            self.walking[idx[walk][leave]] = False
+        self._finish(k, idx, new)
 
-        arrived = np.hypot(*(new - goal).T) <= s.goal_tolerance
+    def _switch_modes(self, idx: IntArray, here: FloatArray, clean: FloatArray) -> None:
+        """Count stalls; hand a fresh stall to the guide (after enough walks) or to a random walk."""
+        s = self.s
+        stalled = (np.hypot(clean[:, 0], clean[:, 1]) < s.stall_speed) & (
+            np.hypot(*(here - self.goal).T) > s.stall_distance
+        )
+        self.slow_for[idx] = np.where(stalled, self.slow_for[idx] + 1, 0)
+        fresh = stalled & ~self.walking[idx] & ~self.guiding[idx]
+        if self.guide is not None and s.guide_after_walks is not None:
+            handed = fresh & (self.walks[idx] >= s.guide_after_walks)
+            self.guiding[idx[handed]] = True
+            self.guide_best[idx[handed]], self.guide_idle[idx[handed]] = math.inf, 0
+            self.trap[idx[handed]] = np.minimum(self.trap[idx[handed]], self.guide.distance(here[handed]))
+            fresh &= ~handed
+        if s.random_walk:
+            self.walking[idx[fresh]] = True
+            self.walk_age[idx[fresh]] = 0
+            self.walks[idx[fresh]] += 1
+
+    def _guided_velocity(self, guide: NavigationFunction, here: FloatArray) -> FloatArray:
+        """Towards the wavefront target; where that step is blocked (a corner it would cut), towards the cell the
+        point sees down the distance, and where even that is blocked, with the obstacles' push added, so that the
+        point slides along the obstacle."""
+        s, field = self.s, self.field
+        ahead = cap((guide.downhill(here) - here) / s.dt, field.max_speed)
+        direct = field.obstacles.segments_free(here, here + s.dt * ahead)
+        near = cap((guide.downhill(here, 0) - here) / s.dt, field.max_speed)
+        near_ok = field.obstacles.segments_free(here, here + s.dt * near)
+        pushed = cap(ahead + field.repulsive(here), field.max_speed)
+        out: FloatArray = np.where(direct[:, None], ahead, np.where(near_ok[:, None], near, pushed))
+        return out
+
+    def _end_guided_phases(self, guide: NavigationFunction, ids: IntArray, new: FloatArray) -> None:
+        """Back to best first once well past the trap with the goal in sight; to a walk when no longer gaining."""
+        s = self.s
+        left = guide.distance(new)
+        closer = left < self.trap[ids] - s.guide_margin
+        sight = self.field.obstacles.segments_free(new, np.repeat(self.goal[None, :], len(ids), axis=0))
+        self.guiding[ids[closer & sight]] = False
+        # A guided point that stops getting closer (it dithers at a corner where the step to the target and the
+        # slide along the obstacle are both blocked, or sits in a gap narrower than the cells resolve, where the
+        # distance is unknown) would stay for good: it walks off and is guided at its next stall.
+        gained = left < self.guide_best[ids] - 1e-3
+        self.guide_best[ids] = np.where(gained, left, self.guide_best[ids])
+        self.guide_idle[ids] = np.where(gained, 0, self.guide_idle[ids] + 1)
+        lost = ids[self.guiding[ids] & (self.guide_idle[ids] > s.guide_patience)]
+        self.guiding[lost] = False
+        self.walking[lost] = s.random_walk
+        self.walk_age[lost] = 0
+        self.walks[lost] += 1
+
+    def _finish(self, k: int, idx: IntArray, new: FloatArray) -> None:
+        """End the seeds that arrived, and (random walk off) those stalled for ``stall_steps``."""
+        s = self.s
+        arrived = np.hypot(*(new - self.goal).T) <= s.goal_tolerance
         for j in idx[arrived]:
-            reasons[j] = REACHED
-        stuck = ~arrived & (slow_for[idx] >= s.stall_steps) & (not s.random_walk)
+            self.reasons[j] = REACHED
+        stuck = ~arrived & (self.slow_for[idx] >= s.stall_steps) & (not s.random_walk)
         for j in idx[stuck]:
-            reasons[j] = (
-                f"stalled at ({x[j, 0]:.3f}, {x[j, 1]:.3f}): the field vanishes away from the goal "
+            self.reasons[j] = (
+                f"stalled at ({self.x[j, 0]:.3f}, {self.x[j, 1]:.3f}): the field vanishes away from the goal "
                 "(saddle point or local minimum)"
             )
         done = arrived | stuck
-        finished[idx[done]] = k + 1
-        active[idx[done]] = False
+        self.finished[idx[done]] = k + 1
+        self.active[idx[done]] = False
 
-    results = []
-    for i, seed in enumerate(seeds):
-        steps = int(finished[i]) if finished[i] >= 0 else s.max_steps
-        reason = reasons[i] or f"step budget used up ({s.max_steps} steps of {s.dt} s) before reaching the goal"
-        results.append(
-            Rollout(
-                int(seed),
-                path[: steps + 1, i].copy(),
-                walked[:steps, i].copy(),
-                reason == REACHED,
-                reason,
-                steps,
-                int(walked[:steps, i].sum()),
+    def rollouts(self, seeds: Sequence[int]) -> list[Rollout]:
+        """Each seed's :class:`Rollout`, cut where it ended."""
+        s = self.s
+        results = []
+        for i, seed in enumerate(seeds):
+            steps = int(self.finished[i]) if self.finished[i] >= 0 else s.max_steps
+            reason = (
+                self.reasons[i] or f"step budget used up ({s.max_steps} steps of {s.dt} s) before reaching the goal"
             )
-        )
-    return results
+            results.append(
+                Rollout(
+                    int(seed),
+                    self.path[: steps + 1, i].copy(),
+                    self.walked[:steps, i].copy(),
+                    reason == REACHED,
+                    reason,
+                    steps,
+                    int(self.walked[:steps, i].sum()),
+                )
+            )
+        return results
 
 
 def planned_points(
@@ -282,13 +338,16 @@ def planned_points(
     """
     points = rollout.trajectory
     goal = np.asarray(field.goal, dtype=np.float64)
-    if rollout.success and field.obstacles.segments_free(points[-1:], goal[None, :])[0]:
+    if rollout.reached and field.obstacles.segments_free(points[-1:], goal[None, :])[0]:
         points = np.vstack([points, goal])
     if not simplify:
         return points
     path = simplify_path(points, field.obstacles.segments_free)
-    corridor = guide.corridor(points[0]) if guide is not None and rollout.success else None
-    if corridor is None:
+    if guide is None or not rollout.reached:
+        return path
+    try:
+        corridor = guide.corridor(points[0])
+    except NoPathFoundError:
         return path
     shortcut = simplify_path(corridor, field.obstacles.segments_free)
     if field.obstacles.path_free(shortcut) and path_length(shortcut) < path_length(path):
@@ -308,20 +367,27 @@ def plan_potential_field(
 
     The waypoints are :func:`planned_points` of the rollout (with the guide when ``settings`` use one), each
     with the heading of the segment leaving it; the first keeps the start's yaw and the last the heading of the
-    segment reaching it.
+    segment reaching it. Raises :class:`NoPathFoundError` with the reason when the goal is not reached (the
+    step budget used up, a stall, or no way through the obstacles).
     """
     began = time.perf_counter()
     guide = navigation_guide(field, (start[0], start[1])) if settings.guide_after_walks is not None else None
     (rollout,) = roll_out(field, (start[0], start[1]), [seed], settings, guide)
+    if not rollout.reached:
+        raise NoPathFoundError(
+            rollout.reason,
+            time_s=time.perf_counter() - began,
+            iterations=rollout.steps,
+            nodes=int(rollout.trajectory.shape[0]),
+        )
     path = headings_along(planned_points(field, rollout, simplify=simplify, guide=guide))
     path[0, 2] = start[2]
     elapsed = time.perf_counter() - began
     return PlanResult(
-        success=rollout.success,
         path=path,
         length_m=path_length(path),
         time_s=elapsed,
-        first_solution_s=elapsed if rollout.success else None,
+        first_solution_s=elapsed,
         iterations=rollout.steps,
         nodes=int(path.shape[0]),
         reason=rollout.reason,

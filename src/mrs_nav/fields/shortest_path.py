@@ -32,7 +32,9 @@ import numpy as np
 
 from mrs_nav.errors import InvalidInputError, NoPathFoundError
 from mrs_nav.geometry import FloatArray
-from mrs_nav.maps.obstacles import Obstacles
+from mrs_nav.maps.admissible import obstacles_refusal
+from mrs_nav.maps.obstacles import BoolArray, Obstacles
+from mrs_nav.maps.occupancy_grid import IntArray
 
 _TOL = 1e-9
 _ARC_SAMPLES = 16
@@ -100,44 +102,79 @@ def shortest_path(start: tuple[float, float], goal: tuple[float, float], obstacl
     obs = np.vstack([obstacles.circles, np.column_stack([corners, np.zeros(len(corners))])])
     a, b = np.asarray(start, dtype=np.float64), np.asarray(goal, dtype=np.float64)
     for name, p in (("start", a), ("goal", b)):
-        if obstacles.contains(p, -_TOL)[0]:
-            raise InvalidInputError(f"{name} ({p[0]}, {p[1]}) is inside an obstacle")
-
-    points: list[FloatArray] = [a, b]
-    on_circle: list[int] = [-1, -1]
-
-    corner_node: dict[int, int] = {}  # a corner is one node, whichever tangent reaches it
-
-    def add(p: FloatArray, circle: int) -> int:
-        if obs[circle, 2] == 0.0 and circle in corner_node:
-            return corner_node[circle]
-        points.append(p)
-        on_circle.append(circle)
-        if obs[circle, 2] == 0.0:
-            corner_node[circle] = len(points) - 1
-        return len(points) - 1
-
-    segments: list[tuple[int, int]] = [(0, 1)]
-    for i, circle in enumerate(obs):
-        for end in (0, 1):
-            segments.extend((end, add(t, i)) for t in _point_tangents(points[end], circle))
-        for j in range(i + 1, obs.shape[0]):
-            for p, q in _bitangents(circle, obs[j]):
-                segments.append((add(p, i), add(q, j)))
-
-    xy = np.array(points)
-    edges: list[list[tuple[int, float]]] = [[] for _ in points]
-    pairs = np.array(segments)
-    free = obstacles.segments_free(xy[pairs[:, 0]], xy[pairs[:, 1]], clearance=-_TOL)
+        why = obstacles_refusal(obstacles, p[0], p[1], tolerance_m=_TOL)
+        if why:
+            raise InvalidInputError(f"{name} ({p[0]}, {p[1]}) is {why}")
+    graph = _TangentGraph(a, b, obs)
+    xy = np.array(graph.points)
     # A bitangent may touch a circle only where it is tangent: tangent points inside another circle are hidden.
     visible = ~obstacles.contains(xy, -_TOL * 1e3)
     visible[:2] = True
+    edges: list[list[tuple[int, float]]] = [[] for _ in graph.points]
+    _straight_edges(edges, xy, np.array(graph.segments), visible, obstacles)
+    arcs = _arc_edges(edges, xy, graph.on_circle, visible, obstacles)
+    best, before = _dijkstra(edges)
+    if not math.isfinite(best[1]):
+        raise NoPathFoundError(f"no path from {tuple(start)} to {tuple(goal)} between the obstacles")
+
+    chain = [1]
+    while chain[-1] != 0:
+        chain.append(int(before[chain[-1]]))
+    chain.reverse()
+    drawn = [xy[0]]
+    for k1, k2 in itertools.pairwise(chain):
+        if (k1, k2) in arcs:
+            drawn.extend(_arc_outline(obs[arcs[(k1, k2)][0]], *arcs[(k1, k2)][1:]))
+        drawn.append(xy[k2])
+    return ShortestPath(float(best[1]), np.array(drawn))
+
+
+class _TangentGraph:
+    """The graph's nodes (start 0, goal 1, then tangent points, each on circle ``on_circle[k]``, -1 for the two
+    ends) and the candidate straight segments between them (not yet checked for collisions)."""
+
+    def __init__(self, start: FloatArray, goal: FloatArray, obs: FloatArray) -> None:
+        self.obs = obs
+        self.points: list[FloatArray] = [start, goal]
+        self.on_circle: list[int] = [-1, -1]
+        self.corner_node: dict[int, int] = {}  # a corner is one node, whichever tangent reaches it
+        self.segments: list[tuple[int, int]] = [(0, 1)]
+        for i, circle in enumerate(obs):
+            for end in (0, 1):
+                self.segments.extend((end, self.add(t, i)) for t in _point_tangents(self.points[end], circle))
+            for j in range(i + 1, obs.shape[0]):
+                for p, q in _bitangents(circle, obs[j]):
+                    self.segments.append((self.add(p, i), self.add(q, j)))
+
+    def add(self, p: FloatArray, circle: int) -> int:
+        """The node of point ``p`` on ``circle`` (a corner's existing node when it has one)."""
+        corner = self.obs[circle, 2] == 0.0
+        if corner and circle in self.corner_node:
+            return self.corner_node[circle]
+        self.points.append(p)
+        self.on_circle.append(circle)
+        if corner:
+            self.corner_node[circle] = len(self.points) - 1
+        return len(self.points) - 1
+
+
+def _straight_edges(
+    edges: list[list[tuple[int, float]]], xy: FloatArray, pairs: IntArray, visible: BoolArray, obstacles: Obstacles
+) -> None:
+    """Add to ``edges`` the segments of ``pairs`` that cross no obstacle between visible ends."""
+    free = obstacles.segments_free(xy[pairs[:, 0]], xy[pairs[:, 1]], clearance=-_TOL)
     for (p, q), ok in zip(pairs, free, strict=True):
         if ok and visible[p] and visible[q]:
             length = float(np.hypot(*(xy[p] - xy[q])))
             edges[p].append((q, length))
             edges[q].append((p, length))
 
+
+def _arc_edges(
+    edges: list[list[tuple[int, float]]], xy: FloatArray, on_circle: list[int], visible: BoolArray, obstacles: Obstacles
+) -> dict[tuple[int, int], tuple[int, float, float]]:
+    """Add to ``edges`` the arcs between angularly consecutive visible tangent points of each circle that stay
+    outside every other obstacle; return them as ``(node, node) -> (circle, start angle, signed sweep)``."""
     arcs: dict[tuple[int, int], tuple[int, float, float]] = {}
     for i, circle in enumerate(obstacles.circles):
         members = [k for k, c in enumerate(on_circle) if c == i and visible[k]]
@@ -160,9 +197,14 @@ def shortest_path(start: tuple[float, float], goal: tuple[float, float], obstacl
             edges[k2].append((k1, length))
             arcs[(k1, k2)] = (i, t1, sweep)
             arcs[(k2, k1)] = (i, t1 + sweep, -sweep)
+    return arcs
 
-    best = np.full(len(points), np.inf)
-    before = np.full(len(points), -1)
+
+def _dijkstra(edges: list[list[tuple[int, float]]]) -> tuple[FloatArray, IntArray]:
+    """Least cost from node 0 to every node settled before node 1 (inf where not reached), and each one's
+    predecessor (-1 for none)."""
+    best = np.full(len(edges), np.inf)
+    before = np.full(len(edges), -1)
     best[0] = 0.0
     queue = [(0.0, 0)]
     while queue:
@@ -176,16 +218,4 @@ def shortest_path(start: tuple[float, float], goal: tuple[float, float], obstacl
                 best[nxt] = cost + length
                 before[nxt] = node
                 heapq.heappush(queue, (cost + length, nxt))
-    if not math.isfinite(best[1]):
-        raise NoPathFoundError(f"no path from {tuple(start)} to {tuple(goal)} between the obstacles")
-
-    chain = [1]
-    while chain[-1] != 0:
-        chain.append(int(before[chain[-1]]))
-    chain.reverse()
-    drawn = [xy[0]]
-    for k1, k2 in itertools.pairwise(chain):
-        if (k1, k2) in arcs:
-            drawn.extend(_arc_outline(obs[arcs[(k1, k2)][0]], *arcs[(k1, k2)][1:]))
-        drawn.append(xy[k2])
-    return ShortestPath(float(best[1]), np.array(drawn))
+    return best, before

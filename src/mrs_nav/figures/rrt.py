@@ -33,7 +33,8 @@ def make_figures(out_dir: Path, seed: int) -> list[Path]:
     )
     return [
         draw_search(
-            plain,
+            plain.tree,
+            plain.result,
             grid,
             planning,
             start=COURSE_START,
@@ -42,7 +43,8 @@ def make_figures(out_dir: Path, seed: int) -> list[Path]:
             out=out_dir / "figure9_rrt.png",
         ),
         draw_search(
-            star,
+            star.tree,
+            star.result,
             grid,
             planning,
             start=COURSE_START,

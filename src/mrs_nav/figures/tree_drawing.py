@@ -18,12 +18,14 @@ from matplotlib.collections import LineCollection
 from mrs_nav.atomic_write import atomic_path
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
+from mrs_nav.planning import PlanResult
 from mrs_nav.trees import arcs
-from mrs_nav.trees.tree import Search
+from mrs_nav.trees.tree import ArcTree
 
 
 def draw_search(
-    search: Search,
+    tree: ArcTree,
+    result: PlanResult | None,
     grid: OccupancyGrid,
     planning_grid: OccupancyGrid,
     *,
@@ -32,22 +34,22 @@ def draw_search(
     title: str,
     out: Path,
 ) -> Path:
-    """Write a PNG of ``search`` over ``grid`` (``planning_grid`` is the inflated one it ran on); returns ``out``."""
+    """Write a PNG of ``tree`` and the path of ``result`` (None: the search found none) over ``grid``
+    (``planning_grid`` is the inflated one it ran on); returns ``out``."""
     x0, y0, x1, y1 = grid.extent
     fig, ax = plt.subplots(figsize=(6.0, 6.0 * (y1 - y0) / max(x1 - x0, 1e-9) + 0.4), dpi=120)
     shade = np.ones(grid.values.shape)
     shade[~planning_grid.free_mask] = 0.8
     shade[~grid.free_mask] = 0.35
     ax.imshow(shade, origin="lower", extent=(x0, x1, y0, y1), cmap="gray", vmin=0.0, vmax=1.0, interpolation="nearest")
-    tree = search.tree
     if len(tree) > 1:
         poses, first = arcs.sample(tree.edges(), max(grid.resolution, 0.02))
         segments = [poses[first[i] : first[i + 1], :2] for i in range(len(first) - 1)]
         ax.add_collection(LineCollection(segments, colors="tab:blue", linewidths=0.6, alpha=0.6, label="tree"))
         ax.plot(tree.position[1 : len(tree), 0], tree.position[1 : len(tree), 1], ".", color="tab:blue", markersize=2)
-    path = search.result.path
-    if search.result.success:
-        ax.plot(path[:, 0], path[:, 1], color="tab:red", linewidth=2.5, label=f"path {search.result.length_m:.2f} m")
+    if result is not None:
+        path = result.path
+        ax.plot(path[:, 0], path[:, 1], color="tab:red", linewidth=2.5, label=f"path {result.length_m:.2f} m")
     ax.quiver([start.x], [start.y], [np.cos(start.yaw)], [np.sin(start.yaw)], color="tab:green", scale=12, zorder=5)
     ax.plot(start.x, start.y, "o", color="tab:green", label="start", zorder=5)
     ax.plot(goal[0], goal[1], "*", color="tab:red", markersize=14, label="goal", zorder=5)

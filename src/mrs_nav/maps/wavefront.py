@@ -22,7 +22,8 @@ import numpy.typing as npt
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from mrs_nav.geometry import FloatArray
+from mrs_nav.errors import NoPathFoundError
+from mrs_nav.geometry import FloatArray, format_point
 from mrs_nav.maps.occupancy_grid import BoolArray, IntArray, OccupancyGrid
 
 # Neighbour steps (rows, cols) and their lengths in coarse cells; the other half are the reverses.
@@ -116,13 +117,18 @@ class Wavefront:
         c, s = math.cos(yaw), math.sin(yaw)
         return np.stack([x0 + c * u - s * v, y0 + s * u + c * v], axis=1)
 
-    def corridor(self, start: npt.ArrayLike) -> FloatArray | None:
+    def corridor(self, start: npt.ArrayLike) -> FloatArray:
         """Positions ``(K, 2)`` from ``start`` down the distance to the goal (cell centres between the two exact
-        end points), or None when the goal cannot be reached from ``start``'s coarse cell."""
-        flat, inside = self.coarse_cells(np.asarray(start, dtype=np.float64)[None, :2])
+        end points); raises :class:`NoPathFoundError` when the goal cannot be reached from ``start``'s coarse cell."""
+        xy = np.asarray(start, dtype=np.float64)[:2]
+        flat, inside = self.coarse_cells(xy[None, :])
         cell = int(flat[0])
-        if not inside[0] or not math.isfinite(self.distance.reshape(-1)[cell]):
-            return None
+        if not inside[0]:
+            raise NoPathFoundError(f"no path: {format_point(*xy)} lies outside the grid")
+        if not math.isfinite(self.distance.reshape(-1)[cell]):
+            raise NoPathFoundError(
+                f"no path: the goal {format_point(*self.goal)} cannot be reached from {format_point(*xy)}"
+            )
         chain = []
         towards = self.towards.reshape(-1)
         while cell >= 0:

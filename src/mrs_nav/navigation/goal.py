@@ -13,11 +13,10 @@ import math
 from dataclasses import dataclass
 from enum import Enum
 
-import numpy as np
-from scipy import ndimage
-
-from mrs_nav.geometry import format_point
-from mrs_nav.maps.occupancy_grid import UNKNOWN, OccupancyGrid
+from mrs_nav.errors import InvalidInputError
+from mrs_nav.geometry import Pose2D, format_point
+from mrs_nav.maps.admissible import grid_refusal
+from mrs_nav.maps.occupancy_grid import OccupancyGrid
 
 
 class GoalState(Enum):
@@ -65,45 +64,48 @@ class NavEvent:
     message: str
 
 
+@dataclass(frozen=True)
+class NavGoal:
+    """A goal in the map frame: the position ``(x, y)`` (m) and the heading ``yaw`` (rad) to end with, None when
+    any will do.
+
+    Made once where a goal enters (the ROS adapter converts its message into one, the demo and the bench build
+    theirs) and passed down unchanged; finite by construction, so nothing below checks that again.
+    """
+
+    x: float
+    y: float
+    yaw: float | None = None
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.x) and math.isfinite(self.y)):
+            raise InvalidInputError(f"goal ({self.x}, {self.y}): its position is not a finite number")
+        if self.yaw is not None and not math.isfinite(self.yaw):
+            raise InvalidInputError(f"goal {format_point(self.x, self.y)}: its heading is not a finite number")
+
+    @property
+    def position(self) -> tuple[float, float]:
+        return (self.x, self.y)
+
+    def seen_from(self, frame: Pose2D) -> NavGoal:
+        """This goal, given in a frame whose pose is ``frame``, expressed in the frame ``frame`` is given in."""
+        pose = frame.compose(Pose2D(self.x, self.y, 0.0 if self.yaw is None else self.yaw))
+        return NavGoal(pose.x, pose.y, None if self.yaw is None else pose.yaw)
+
+    def describe(self) -> str:
+        heading = "" if self.yaw is None else f", heading {self.yaw:.2f} rad"
+        return f"goal {format_point(self.x, self.y)}{heading}"
+
+
 def goal_refusal(
-    raw: OccupancyGrid | None, grid: OccupancyGrid | None, x: float, y: float, *, yaw: float | None, inflation_m: float
+    raw: OccupancyGrid | None, grid: OccupancyGrid | None, goal: NavGoal, *, inflation_m: float
 ) -> str | None:
-    """Why the goal ``(x, y)`` (heading ``yaw``, None for any) must be refused on the map ``raw`` planned on as
-    ``grid`` (inflated by ``inflation_m``, unknown made free when allowed), or None when it may be tried."""
-    if not (math.isfinite(x) and math.isfinite(y)):
-        return "its position is not a finite number"
-    if yaw is not None and not math.isfinite(yaw):
-        return "its heading is not a finite number"
+    """Why ``goal`` must be refused on the map ``raw`` planned on as ``grid`` (inflated by ``inflation_m``,
+    unknown made free when allowed), or None when it may be tried."""
     if grid is None or raw is None:
         return "no map received yet"
-    goal = np.array([[x, y]])
-    _, _, inside = grid.cells_of(goal)
-    if not inside[0]:
-        return "it lies outside the map"
-    if raw.is_occupied(goal)[0]:
-        return "it lies inside an obstacle"
-    if grid.is_occupied(goal)[0]:
-        return f"it lies within {inflation_m:.3f} m (robot radius + margin) of an obstacle"
-    if not grid.is_free(goal)[0]:
-        return "it lies in unknown space and allow_unknown is off"
-    if enclosed_unknown(raw, x, y):
-        return "it lies in unknown space enclosed by obstacles (the inside of an obstacle)"
-    return None
-
-
-def enclosed_unknown(raw: OccupancyGrid, x: float, y: float) -> bool:
-    """Whether ``(x, y)`` lies in an unknown region of ``raw`` that touches neither a free cell nor the edge of
-    the map: the unseen inside of an obstacle, which ``allow_unknown`` must not make a goal."""
-    rows, cols, inside = raw.cells_of(np.array([[x, y]]))
-    unknown = raw.values == UNKNOWN
-    if not inside[0] or not unknown[rows[0], cols[0]]:
-        return False
-    labels, _ = ndimage.label(unknown)  # 4-connected: a diagonal gap in a wall does not open it
-    region = labels == labels[rows[0], cols[0]]
-    if region[0, :].any() or region[-1, :].any() or region[:, 0].any() or region[:, -1].any():
-        return False
-    rim = ndimage.binary_dilation(region) & ~region
-    return not bool(np.any(raw.free_mask[rim]))
+    why = grid_refusal(grid, goal.x, goal.y, raw=raw, inflation_m=inflation_m, unknown_hint=" and allow_unknown is off")
+    return None if why is None else f"it lies {why}"
 
 
 class GoalTracker:
@@ -111,8 +113,7 @@ class GoalTracker:
 
     def __init__(self) -> None:
         self.state = GoalState.IDLE
-        self.goal: tuple[float, float] | None = None
-        self.yaw: float | None = None  # the goal heading (rad), None when any will do
+        self.goal: NavGoal | None = None
 
     @property
     def active(self) -> bool:
@@ -120,18 +121,16 @@ class GoalTracker:
 
     def describe(self) -> str:
         assert self.goal is not None
-        return f"goal {format_point(*self.goal)}"
+        return f"goal {format_point(self.goal.x, self.goal.y)}"
 
-    def accept(self, x: float, y: float, yaw: float | None = None) -> list[NavEvent]:
-        """Make ``(x, y)`` (heading ``yaw``) the active goal; the events (a preemption first, if any)."""
+    def accept(self, goal: NavGoal) -> list[NavEvent]:
+        """Make ``goal`` the active goal; the events (a preemption first, if any)."""
         events = []
         if self.active:
             events.append(NavEvent(EventKind.PREEMPTED, f"{self.describe()} preempted by a new goal"))
-        self.goal = (float(x), float(y))
-        self.yaw = None if yaw is None else float(yaw)
+        self.goal = goal
         self.state = GoalState.ACTIVE
-        heading = "" if yaw is None else f", heading {yaw:.2f} rad"
-        events.append(NavEvent(EventKind.ACCEPTED, f"goal {format_point(x, y)}{heading} accepted"))
+        events.append(NavEvent(EventKind.ACCEPTED, f"{goal.describe()} accepted"))
         return events
 
     def cancel(self) -> list[NavEvent]:
@@ -144,5 +143,4 @@ class GoalTracker:
     def end(self, state: GoalState) -> None:
         """End the active goal in ``state``."""
         self.goal = None
-        self.yaw = None
         self.state = state

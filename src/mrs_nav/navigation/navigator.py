@@ -46,7 +46,7 @@ from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D, format_point, wrap_angle
 from mrs_nav.maps.occupancy_grid import OccupancyGrid, planning_grid
 from mrs_nav.navigation.config import NavigatorConfig
-from mrs_nav.navigation.goal import EventKind, GoalState, GoalTracker, NavEvent, goal_refusal
+from mrs_nav.navigation.goal import EventKind, GoalState, GoalTracker, NavEvent, NavGoal, goal_refusal
 from mrs_nav.navigation.obstacles import ScanObstacles, return_ahead
 from mrs_nav.navigation.plan_worker import (
     PLANNERS,
@@ -68,6 +68,7 @@ __all__ = [
     "GoalState",
     "NavCommand",
     "NavEvent",
+    "NavGoal",
     "Navigator",
     "NavigatorConfig",
     "PlanOutcome",
@@ -126,7 +127,8 @@ class Navigator:
 
     @property
     def goal(self) -> tuple[float, float] | None:
-        return self._goal.goal
+        """The position (m) of the current goal, None without one."""
+        return None if self._goal.goal is None else self._goal.goal.position
 
     # -- inputs -------------------------------------------------------------------------------------------
 
@@ -188,16 +190,16 @@ class Navigator:
 
     @property
     def goal_yaw(self) -> float | None:
-        """The heading (rad) the current goal asks for, None when any will do."""
-        return self._goal.yaw
+        """The heading (rad) the current goal asks for, None when any will do (or without a goal)."""
+        return None if self._goal.goal is None else self._goal.goal.yaw
 
-    def set_goal(self, x: float, y: float, now: float, yaw: float | None = None) -> list[NavEvent]:
-        """Ask to go to ``(x, y)`` (map frame), ending with heading ``yaw`` (rad; None: any). A valid goal
-        preempts the current one; a bad one is refused and leaves the current goal (if any) running."""
-        refusal = goal_refusal(self.marked_grid, self.inflated_grid, x, y, yaw=yaw, inflation_m=self.config.inflation_m)
+    def set_goal(self, goal: NavGoal, now: float) -> list[NavEvent]:
+        """Ask to go to ``goal`` (map frame). A goal the map admits preempts the current one; another is refused
+        and leaves the current goal (if any) running."""
+        refusal = goal_refusal(self.marked_grid, self.inflated_grid, goal, inflation_m=self.config.inflation_m)
         if refusal is not None:
-            return [NavEvent(EventKind.REFUSED, f"goal {format_point(x, y)} refused: {refusal}")]
-        events = self._goal.accept(x, y, yaw)
+            return [NavEvent(EventKind.REFUSED, f"goal {format_point(goal.x, goal.y)} refused: {refusal}")]
+        events = self._goal.accept(goal)
         self._reset_goal()
         self._policy.new_goal(now)
         return events
@@ -251,7 +253,7 @@ class Navigator:
             events.append(NavEvent(EventKind.RESUMED, "pose and map are back; resuming"))
         distance = math.hypot(self.goal[0] - pose.x, self.goal[1] - pose.y)
         if self._approach is None and distance <= self.config.approach_radius_m:
-            self._approach = GoalApproach(*self.goal, self._goal.yaw, self.config.approach)
+            self._approach = GoalApproach(*self.goal, self.goal_yaw, self.config.approach)
         if self._approach is not None:
             return self._approach_step(pose, now, distance, events, doubt)
         if self._policy.note_distance(distance, now):
@@ -319,7 +321,7 @@ class Navigator:
         step = self._approach.command(pose, now)
         if step.done:
             what = self._goal.describe()
-            yaw = self._goal.yaw
+            yaw = self.goal_yaw
             heading = "" if yaw is None else f" and {abs(wrap_angle(yaw - pose.yaw)):.3f} rad"
             where = f"{distance:.3f} m{heading} away"
             if doubt is not None:
@@ -376,17 +378,15 @@ class Navigator:
         self._policy.started(now)
         return PlanRequest(self.goal, pose, now, reason, grid, raw, remaining)
 
-    def plan_query(self, start: Pose2D, goal: tuple[float, float]) -> PlanRequest:
+    def plan_query(self, start: Pose2D, goal: NavGoal) -> PlanRequest:
         """A request to plan from ``start`` to ``goal`` on the current map that leaves the navigator's own goal
         alone (move_base's ``make_plan``); run it with :func:`~mrs_nav.navigation.plan_worker.run_plan` and a
         generator of its own. Raises :class:`InvalidInputError` for a goal :meth:`set_goal` would refuse."""
-        refusal = goal_refusal(
-            self.marked_grid, self.inflated_grid, goal[0], goal[1], yaw=None, inflation_m=self.config.inflation_m
-        )
+        refusal = goal_refusal(self.marked_grid, self.inflated_grid, goal, inflation_m=self.config.inflation_m)
         if refusal is not None:
-            raise InvalidInputError(f"goal {format_point(*goal)}: {refusal}")
+            raise InvalidInputError(f"goal {format_point(goal.x, goal.y)}: {refusal}")
         grid, raw = self._maps()
-        return PlanRequest(goal, start, math.nan, "make_plan", grid, raw, math.inf)
+        return PlanRequest(goal.position, start, math.nan, "make_plan", grid, raw, math.inf)
 
     def run_plan(self, request: PlanRequest) -> PlanOutcome:
         """Plan for ``request`` (:func:`~mrs_nav.navigation.plan_worker.run_plan`). Reads only the request, the

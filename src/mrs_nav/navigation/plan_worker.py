@@ -33,8 +33,9 @@ from mrs_nav.trees.rrt_star import RRTStarConfig, rrt_star
 class Planner(Protocol):
     """Plans from ``start`` to the position ``goal`` on ``grid`` (already inflated; plan only on free cells).
 
-    Returns a :class:`PlanResult` whose ``path`` is ``(N, 3)`` poses; may raise :class:`MrsNavError` (e.g. the
-    start or goal is not free). ``rng`` seeds any randomness.
+    Returns a :class:`PlanResult` whose ``path`` is ``(N, 3)`` poses; raises
+    :class:`~mrs_nav.errors.NoPathFoundError` when it finds no path and another :class:`MrsNavError` on a bad
+    query (e.g. the start or goal is not free). ``rng`` seeds any randomness.
     """
 
     def __call__(
@@ -112,9 +113,7 @@ def run_plan(
         except MrsNavError as err:
             why = str(err)
             continue
-        if not result.success or result.path.shape[0] == 0:
-            why = result.reason or "no path"
-        elif best is None or result.length_m < best.length_m:
+        if best is None or result.length_m < best.length_m:
             best = result
     return best, "" if best is not None else why
 

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mrs_nav.errors import NoPathFoundError
 from mrs_nav.geometry import Pose2D, wrap_angle
 from mrs_nav.maps.occupancy_grid import OccupancyGrid, planning_grid
 from mrs_nav.planning import PlanResult
@@ -26,11 +27,20 @@ from mrs_nav.trees.rrt_star import RRTStarConfig, rrt_star
 
 @dataclass(frozen=True)
 class GoalPlan:
-    """One re-planned goal: where from and to (m, rad), and the planner's result."""
+    """One re-planned goal: where from and to (m, rad), and the planner's result, or (``result`` None) the
+    planner's :class:`NoPathFoundError`."""
 
     start: Pose2D
     goal: Goal
-    result: PlanResult
+    result: PlanResult | None
+    no_path: NoPathFoundError | None = None
+
+    @property
+    def iterations(self) -> int:
+        """The planner's iterations, whether it found a path or not."""
+        if self.result is not None:
+            return self.result.iterations
+        return self.no_path.iterations if self.no_path is not None else 0
 
 
 def replan_goals(
@@ -57,8 +67,12 @@ def replan_goals(
         best: GoalPlan | None = None
         for k, heading in enumerate((start.yaw, wrap_angle(start.yaw + math.pi))):
             from_pose = Pose2D(start.x, start.y, heading)
-            result = rrt_star(from_pose, target, plan_grid, config, np.random.default_rng([seed, i, k]))
-            if best is None or (result.success and (not best.result.success or result.length_m < best.result.length_m)):
+            try:
+                result = rrt_star(from_pose, target, plan_grid, config, np.random.default_rng([seed, i, k]))
+            except NoPathFoundError as err:
+                best = best or GoalPlan(from_pose, goal, None, err)
+                continue
+            if best is None or best.result is None or result.length_m < best.result.length_m:
                 best = GoalPlan(from_pose, goal, result)
         assert best is not None
         plans.append(best)

@@ -108,16 +108,16 @@ def replay_session(
 
         session.plans = plan_on(grid)
         metrics["goals"] = len(recorded.goals)
-        metrics["goals_reachable"] = sum(p.result.success for p in session.plans)
+        metrics["goals_reachable"] = sum(p.result is not None for p in session.plans)
         if recorded.final_map is not None:
             session.plans_on_recorded_map = plan_on(recorded.final_map)
-            metrics["goals_reachable_recorded_map"] = sum(p.result.success for p in session.plans_on_recorded_map)
+            metrics["goals_reachable_recorded_map"] = sum(p.result is not None for p in session.plans_on_recorded_map)
         else:
             metrics["goals_reachable_recorded_map"] = None
         ratios = [
             mine.result.length_m / theirs.result.length_m
             for mine, theirs in zip(session.plans, session.plans_on_recorded_map, strict=False)
-            if mine.result.success and theirs.result.success and theirs.result.length_m > 0.0
+            if mine.result is not None and theirs.result is not None and theirs.result.length_m > 0.0
         ]
         metrics["plan_length_ratio_mean"] = float(np.mean(ratios)) if ratios else None
     session.metrics = {k: _rounded(v) for k, v in metrics.items()}
@@ -136,17 +136,20 @@ def _rounded(value: float | int | None) -> float | int | None:
 
 
 def plans_json(session: SessionReplay) -> dict[str, Any]:
-    """The re-planned goals (start, goal, success, length, path) without timings, so the text is reproducible."""
+    """The re-planned goals (start, goal, success, length, path) without timings, so the text is reproducible.
+
+    A goal with no path has ``success`` false, length 0 and an empty path."""
 
     def entry(plan: GoalPlan) -> dict[str, Any]:
+        path = np.zeros((0, 3)) if plan.result is None else np.asarray(plan.result.path).reshape(-1, 3)
         return {
             "stamp": round(plan.goal.stamp, 6),
             "start": [round(v, 4) for v in (plan.start.x, plan.start.y, plan.start.yaw)],
             "goal": [round(plan.goal.pose.x, 4), round(plan.goal.pose.y, 4)],
-            "success": plan.result.success,
-            "length_m": round(plan.result.length_m, 4),
-            "iterations": plan.result.iterations,
-            "path": [[round(float(v), 4) for v in row] for row in np.asarray(plan.result.path).reshape(-1, 3)],
+            "success": plan.result is not None,
+            "length_m": round(plan.result.length_m, 4) if plan.result is not None else 0.0,
+            "iterations": plan.iterations,
+            "path": [[round(float(v), 4) for v in row] for row in path],
         }
 
     return {

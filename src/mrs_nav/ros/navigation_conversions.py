@@ -16,8 +16,9 @@ from sensor_msgs.msg import LaserScan
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
+from mrs_nav.navigation.goal import NavGoal
 from mrs_nav.navigation.obstacles import beam_ends
-from mrs_nav.ros.conversions import laser_scan_arrays, pose_from_msg, pose_from_transform, pose_msg
+from mrs_nav.ros.conversions import laser_scan_arrays, pose_from_msg, pose_from_transform, pose_msg, quaternion_yaw
 
 
 def grid_from_msg(msg: OccupancyGridMsg) -> OccupancyGrid:
@@ -43,16 +44,20 @@ def path_msg(path: FloatArray, stamp: rospy.Time, frame: str) -> Path:
     return msg
 
 
+def no_heading(msg: PoseStamped) -> bool:
+    """Whether the pose's orientation is the all-zero quaternion: a goal sent without a heading (move_base's
+    clients and rviz never send it otherwise)."""
+    q = msg.pose.orientation
+    return bool(q.x == 0.0 and q.y == 0.0 and q.z == 0.0 and q.w == 0.0)
+
+
 def pose_in_frame(buffer: tf2_ros.Buffer, msg: PoseStamped, frame: str) -> Pose2D:
     """The planar pose of ``msg`` expressed in ``frame`` (an empty header frame means ``frame``).
 
-    An all-zero orientation is a pose without a heading (:func:`goal_heading`): its position is taken with no
+    An all-zero orientation is a pose without a heading (:func:`no_heading`): its position is taken with no
     rotation. Raises InvalidInputError for a non-finite pose and ``tf2_ros.TransformException`` when tf cannot
     transform it (waits up to 0.5 s for the transform)."""
-    if goal_heading(msg) is None:
-        pose = Pose2D(msg.pose.position.x, msg.pose.position.y, 0.0)
-    else:
-        pose = pose_from_msg(msg.pose)
+    pose = Pose2D(msg.pose.position.x, msg.pose.position.y, 0.0) if no_heading(msg) else pose_from_msg(msg.pose)
     source = msg.header.frame_id.lstrip("/")
     if source in ("", frame):
         return pose
@@ -89,13 +94,19 @@ def grid_msg(grid: OccupancyGrid, stamp: rospy.Time, frame: str) -> OccupancyGri
     return msg
 
 
-def goal_heading(msg: PoseStamped) -> float | None:
-    """The heading (rad) a goal asks for, or None when its orientation is the all-zero quaternion (no rotation:
-    a goal sent without one)."""
+def goal_in_frame(buffer: tf2_ros.Buffer, msg: PoseStamped, frame: str) -> NavGoal:
+    """The goal ``msg`` asks for, in ``frame`` (an empty header frame means ``frame``): its position and heading,
+    None when the orientation is the all-zero quaternion (no rotation: a goal sent without one).
+
+    The one conversion of a goal message: raises InvalidInputError for a non-finite position or an invalid
+    quaternion, and ``tf2_ros.TransformException`` when tf cannot transform it (waits up to 0.5 s)."""
     q = msg.pose.orientation
-    if q.x == 0.0 and q.y == 0.0 and q.z == 0.0 and q.w == 0.0:
-        return None
-    return pose_from_msg(msg.pose).yaw
+    goal = NavGoal(msg.pose.position.x, msg.pose.position.y, None if no_heading(msg) else quaternion_yaw(q))
+    source = msg.header.frame_id.lstrip("/")
+    if source in ("", frame):
+        return goal
+    transform = buffer.lookup_transform(frame, source, rospy.Time(0), rospy.Duration(0.5))
+    return goal.seen_from(pose_from_transform(transform))
 
 
 def scan_in_frame(

@@ -38,6 +38,7 @@ from mrs_nav.config_files import node_default, node_defaults
 from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.fields.follower import FieldFollower, FieldFollowerConfig, scan_obstacles
 from mrs_nav.geometry import Pose2D, format_point
+from mrs_nav.maps.admissible import obstacles_refusal
 from mrs_nav.maps.obstacles import Obstacles
 from mrs_nav.maps.world import load_world
 from mrs_nav.ros.clock_jump import TimeJumpGuard
@@ -195,9 +196,14 @@ class PotentialFieldNavigationNode:
 
     def _set_goal(self, x: float, y: float) -> None:
         obstacles = self._world_obstacles
-        if obstacles is not None and obstacles.inflated(self.config.follower.robot_radius).contains([[x, y]])[0]:
-            rospy.logwarn(f"potential_field_navigation: goal {format_point(x, y)} refused: inside an obstacle")
-            self._status("refused", f"goal {format_point(x, y)} refused: inside an obstacle")
+        why = (
+            None
+            if obstacles is None
+            else obstacles_refusal(obstacles, x, y, clearance_m=self.config.follower.robot_radius)
+        )
+        if why:
+            rospy.logwarn(f"potential_field_navigation: goal {format_point(x, y)} refused: {why}")
+            self._status("refused", f"goal {format_point(x, y)} refused: {why}")
             return
         with self._lock:
             current = obstacles or self._scan_obstacles or Obstacles()

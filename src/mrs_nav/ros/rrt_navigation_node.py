@@ -86,7 +86,7 @@ from mrs_nav.navigation.recovery import RecoveryConfig
 from mrs_nav.ros.clock_jump import TimeJumpGuard, keep_status_timer
 from mrs_nav.ros.conversions import covariance_3x3, pose_msg
 from mrs_nav.ros.navigation_conversions import (
-    goal_heading,
+    goal_in_frame,
     grid_from_msg,
     grid_msg,
     latest_pose,
@@ -379,15 +379,14 @@ class RrtNavigationNode:
         """A new goal (called by actionlib with its lock held; ours is taken inside it, never the other way)."""
         target = handle.get_goal().target_pose
         try:
-            pose = pose_in_frame(self._tf_buffer, target, self.config.map_frame)
+            goal = goal_in_frame(self._tf_buffer, target, self.config.map_frame)
         except (MrsNavError, tf2_ros.TransformException) as err:
             event = NavEvent(EventKind.REFUSED, f"goal refused: {err}")
             self._report([event])
             handle.set_rejected(MoveBaseResult(), event.message)
             return
-        yaw = goal_heading(target)
         with self._lock:
-            events = self.navigator.set_goal(pose.x, pose.y, rospy.get_time(), yaw)
+            events = self.navigator.set_goal(goal, rospy.get_time())
             refused = events[-1].kind is EventKind.REFUSED
             previous = None
             if not refused:
@@ -417,7 +416,7 @@ class RrtNavigationNode:
         response.plan.header.frame_id = self.config.map_frame
         response.plan.header.stamp = rospy.Time.now()
         try:
-            goal = pose_in_frame(self._tf_buffer, req.goal, self.config.map_frame)
+            goal = goal_in_frame(self._tf_buffer, req.goal, self.config.map_frame)
             start = (
                 pose_in_frame(self._tf_buffer, req.start, self.config.map_frame)
                 if req.start.header.frame_id
@@ -426,7 +425,7 @@ class RrtNavigationNode:
             if start is None:
                 raise InvalidInputError("no start given and no robot pose")
             with self._lock:
-                request = self.navigator.plan_query(start, (goal.x, goal.y))
+                request = self.navigator.plan_query(start, goal)
         except (MrsNavError, tf2_ros.TransformException) as err:
             rospy.logwarn(f"rrt_navigation: make_plan: {err}")
             return response

@@ -36,7 +36,7 @@ from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.maps.rasterize import raster_frame
 from mrs_nav.maps.world import World
-from mrs_nav.navigation.navigator import GoalState, NavEvent, Navigator, NavigatorConfig, rrt_planner
+from mrs_nav.navigation.navigator import GoalState, NavEvent, NavGoal, Navigator, NavigatorConfig, rrt_planner
 from mrs_nav.sim import Scan, Simulator, SimulatorConfig
 from mrs_nav.slam import Slam, SlamConfig
 from mrs_nav.slam.eval.map_iou import map_iou
@@ -223,7 +223,7 @@ class Demo:
         self._publish_map(force=True)
         if self.recorder:
             self.recorder.goal(sim.time, *goal)
-        events = list(nav.set_goal(goal[0], goal[1], sim.time))
+        events = list(nav.set_goal(NavGoal(goal[0], goal[1]), sim.time))
         path_length = 0.0
         while nav.state is GoalState.ACTIVE and sim.time - t0 < cfg.goal_timeout_s:
             self._record_odometry()

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from mrs_nav.errors import NoPathFoundError
 from mrs_nav.geometry import FloatArray
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.maps.wavefront import Wavefront, wavefront
@@ -50,9 +51,11 @@ class CorridorSampler:
         narrower than a coarse cell open) connects them."""
         for optimistic in (False, True):
             wave = wavefront(grid, goal, cell_m, optimistic)
-            path = wave.corridor(start)
-            if path is not None:
-                return cls(wave, path, lookahead=lookahead, spread=spread)
+            try:
+                path = wave.corridor(start)
+            except NoPathFoundError:
+                continue
+            return cls(wave, path, lookahead=lookahead, spread=spread)
         return None
 
     def reached(self, position: FloatArray) -> None:

@@ -23,10 +23,11 @@ import numpy as np
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D
+from mrs_nav.maps.admissible import grid_refusal
 from mrs_nav.maps.occupancy_grid import IntArray, OccupancyGrid
 from mrs_nav.planning import PlanResult, path_length
 from mrs_nav.trees import arcs
-from mrs_nav.trees.tree import ArcTree, Search
+from mrs_nav.trees.tree import ArcTree, Search, budget_used_up
 
 # How many nearest nodes are screened for a parent before falling back to every node within max_step.
 _PARENT_CANDIDATES = 16
@@ -72,27 +73,12 @@ def check_budget(iterations: int | None, time_budget: float | None) -> None:
         raise InvalidInputError(f"time budget must be finite and >= 0 s, got {time_budget}")
 
 
-def describe_point(grid: OccupancyGrid, point: FloatArray) -> str | None:
-    """Why ``point`` cannot be a start or goal (outside the map, unknown, in or too near an obstacle), or None."""
-    rows, cols, inside = grid.cells_of(point[:2])
-    if not inside[0]:
-        return "is outside the map"
-    value = int(grid.values[rows[0], cols[0]])
-    if grid.free_mask[rows[0], cols[0]]:
-        return None
-    if value < 0:
-        return "is in unknown space"
-    return "is in an obstacle (or within the robot radius of one)"
-
-
 def check_query(grid: OccupancyGrid, start: Pose2D, goal: FloatArray) -> None:
-    """Raise :class:`InvalidInputError` naming the problem when the start or goal is not in free space."""
+    """Raise :class:`InvalidInputError` naming the problem when the start or goal is not admissible on ``grid``."""
     for what, point in (("start", start.position), ("goal", goal)):
-        if not np.all(np.isfinite(point)):
-            raise InvalidInputError(f"{what} must be finite, got {tuple(point)}")
-        why = describe_point(grid, point)
+        why = grid_refusal(grid, float(point[0]), float(point[1]))
         if why:
-            raise InvalidInputError(f"{what} ({point[0]:.3f}, {point[1]:.3f}) {why}")
+            raise InvalidInputError(f"{what} ({point[0]:.3f}, {point[1]:.3f}) is {why}")
 
 
 def sample_random_position(
@@ -154,6 +140,9 @@ def grow_rrt(
 ) -> Search:
     """Run RRT from ``start`` to ``goal`` (x, y) on ``grid``; return the result with its tree (for drawing).
 
+    Raises :class:`~mrs_nav.trees.tree.NoPathInTreeError` (a :class:`NoPathFoundError` holding the tree) when the
+    budget ends first, and :class:`InvalidInputError` when the start or goal is not admissible.
+
     Times and the budget are read from ``clock`` (wall time by default; benchmarks on a shared machine may pass
     :func:`time.process_time`)."""
     t0 = clock()
@@ -183,9 +172,7 @@ def grow_rrt(
                 )
         if reached:
             return _solved(tree, node, None, grid, elapsed=clock() - t0, iterations=iteration)
-    elapsed = clock() - t0
-    reason = "iteration budget used up" if iteration >= limit else "time budget used up"
-    return Search(failed(start, elapsed, iteration, len(tree), f"no path found: {reason}"), tree, ())
+    raise budget_used_up(tree, used_iterations=iteration >= limit, time_s=clock() - t0, iterations=iteration)
 
 
 def _solved(
@@ -193,14 +180,8 @@ def _solved(
 ) -> Search:
     path = tree.path_poses(tree.branch(node), grid.resolution, tail)
     length = path_length(path)
-    result = PlanResult(True, path, length, elapsed, elapsed, iterations, len(tree), "goal reached")
+    result = PlanResult(path, length, elapsed, elapsed, iterations, len(tree), "goal reached")
     return Search(result, tree, ((iterations, elapsed, length),))
-
-
-def failed(start: Pose2D, elapsed: float, iterations: int, nodes: int, reason: str) -> PlanResult:
-    """The result of a search that found nothing: the path is the start pose alone."""
-    path = np.array([[start.x, start.y, start.yaw]])
-    return PlanResult(False, path, 0.0, elapsed, None, iterations, nodes, reason)
 
 
 def rrt(
@@ -210,5 +191,5 @@ def rrt(
     config: RRTConfig | None = None,
     rng: np.random.Generator | None = None,
 ) -> PlanResult:
-    """RRT from ``start`` to ``goal`` on ``grid`` (already inflated); see the module docstring."""
+    """RRT from ``start`` to ``goal`` on ``grid`` (already inflated); see the module docstring and :func:`grow_rrt`."""
     return grow_rrt(start, goal, grid, config or RRTConfig(), rng or np.random.default_rng()).result

@@ -38,8 +38,8 @@ from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.planning import PlanResult, path_length
 from mrs_nav.trees import arcs, kernels
 from mrs_nav.trees.guide import CorridorSampler
-from mrs_nav.trees.rrt import check_budget, check_query, failed, sample_random_position
-from mrs_nav.trees.tree import ArcTree, Search
+from mrs_nav.trees.rrt import check_budget, check_query, sample_random_position
+from mrs_nav.trees.tree import ArcTree, Search, budget_used_up
 
 # How many nearest nodes a guided target may be steered from.
 _AHEAD_CANDIDATES = 8
@@ -203,7 +203,8 @@ def grow_rrt_star(
 ) -> Search:
     """Run RRT* from ``start`` to ``goal`` (x, y) on ``grid`` (inflated); the result, tree and improvements.
 
-    Times and the budget are read from ``clock`` (wall time by default)."""
+    Times and the budget are read from ``clock`` (wall time by default). Raises
+    :class:`~mrs_nav.trees.tree.NoPathInTreeError` when the budget ends before any path reached the goal."""
     t0 = clock()
     goal = np.asarray(goal, dtype=np.float64)[:2]
     check_query(grid, start, goal)
@@ -263,11 +264,10 @@ def grow_rrt_star(
             if config.stop_at_first:
                 break
     elapsed = clock() - t0
-    if best_path is None:
-        reason = "iteration budget used up" if iteration >= limit else "time budget used up"
-        return Search(failed(start, elapsed, iteration, len(tree), f"no path found: {reason}"), tree, ())
+    if best_path is None or first_s is None:
+        raise budget_used_up(tree, used_iterations=iteration >= limit, time_s=elapsed, iterations=iteration)
     result = PlanResult(
-        True, best_path, path_length(best_path), elapsed, first_s, iteration, len(tree), "best path within budget"
+        best_path, path_length(best_path), elapsed, first_s, iteration, len(tree), "best path within budget"
     )
     return Search(result, tree, tuple(history))
 

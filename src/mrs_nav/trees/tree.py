@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from mrs_nav.errors import NoPathFoundError
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.occupancy_grid import IntArray
 from mrs_nav.planning import PlanResult
@@ -118,7 +119,7 @@ class ArcTree:
 
 @dataclass(frozen=True, eq=False)
 class Search:
-    """A planner's result with the tree it grew and the improvements it made on the way.
+    """A tree planner's result with the tree it grew and the improvements it made on the way.
 
     ``history`` holds ``(iteration, seconds since start, path length in metres)`` each time the best path
     improved (one entry for RRT, which stops at its first path).
@@ -127,3 +128,17 @@ class Search:
     result: PlanResult
     tree: ArcTree
     history: tuple[tuple[int, float, float], ...]
+
+
+class NoPathInTreeError(NoPathFoundError):
+    """A tree planner used its budget without reaching the goal; ``tree`` is what it grew (for drawing)."""
+
+    def __init__(self, reason: str, tree: ArcTree, *, time_s: float, iterations: int) -> None:
+        super().__init__(reason, time_s=time_s, iterations=iterations, nodes=len(tree))
+        self.tree = tree
+
+
+def budget_used_up(tree: ArcTree, *, used_iterations: bool, time_s: float, iterations: int) -> NoPathInTreeError:
+    """The error of a tree search that found no path within its iteration (or else time) budget."""
+    reason = "iteration budget used up" if used_iterations else "time budget used up"
+    return NoPathInTreeError(f"no path found: {reason}", tree, time_s=time_s, iterations=iterations)

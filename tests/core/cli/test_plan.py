@@ -64,7 +64,10 @@ def test_goal_not_reached_exits_2_with_the_reason(capsys: pytest.CaptureFixture[
     argv = ["plan", "--circles", TRAP, "--start", "-1.5,0", "--goal", "1.5,0", "--max-steps", "20", "--json"]
     assert main(argv) == 2
     captured = capsys.readouterr()
-    assert json.loads(captured.out)["success"] is False
+    out = json.loads(captured.out)
+    assert out["success"] is False
+    assert out["path"] == []  # no partial trajectory passed off as a plan
+    assert out["iterations"] == 20
     assert captured.err.startswith("ERROR: goal not reached: step budget used up")
 
 

@@ -52,7 +52,10 @@ def test_plan_on_a_world_file_rasterises_it(capsys: pytest.CaptureFixture[str]) 
     assert "goal reached" in capsys.readouterr().out
 
 
-def test_no_path_within_budget_exits_2(capsys: pytest.CaptureFixture[str]) -> None:
+def test_no_path_within_budget_exits_2_and_still_draws_the_tree(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    png = tmp_path / "tree.png"
     code = main(
         [
             "plan",
@@ -66,10 +69,15 @@ def test_no_path_within_budget_exits_2(capsys: pytest.CaptureFixture[str]) -> No
             "1.5,1.5",
             "--iterations",
             "1",
+            "--png",
+            str(png),
         ]
     )
     assert code == 2
-    assert capsys.readouterr().err.strip().startswith("ERROR: goal not reached")
+    captured = capsys.readouterr()
+    assert captured.err.strip() == "ERROR: goal not reached: no path found: iteration budget used up"
+    assert captured.out.startswith("rrt_star: no path found: iteration budget used up in ")
+    assert png.stat().st_size > 0
 
 
 @pytest.mark.parametrize(

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from mrs_nav.errors import InvalidInputError
+from mrs_nav.errors import InvalidInputError, NoPathFoundError
 from mrs_nav.fields.randomized_potential_field import EscapeSettings, plan_potential_field, planned_points, roll_out
 from mrs_nav.fields.scenarios import symmetric_trap, two_cylinder_trap
 from mrs_nav.fields.shortest_path import shortest_path
@@ -20,7 +20,7 @@ NOTHING = EscapeSettings(noise_std=0.0, random_walk=False)
 def test_without_noise_the_descent_stalls_at_the_saddle_in_front_of_a_cylinder_at_the_origin() -> None:
     scenario = symmetric_trap()
     (rollout,) = roll_out(scenario.field(), scenario.start, [0], NOTHING)
-    assert not rollout.success
+    assert not rollout.reached
     assert "stalled" in rollout.reason
     end = rollout.trajectory[-1]
     assert end[0] == pytest.approx(end[1])  # still on the diagonal through start, cylinder and goal
@@ -30,20 +30,20 @@ def test_without_noise_the_descent_stalls_at_the_saddle_in_front_of_a_cylinder_a
 def test_noise_on_the_attractive_field_gets_at_least_99_of_100_seeds_past_the_saddle() -> None:
     scenario = symmetric_trap()
     rollouts = roll_out(scenario.field(), scenario.start, SEEDS, EscapeSettings(random_walk=False))
-    assert sum(r.success for r in rollouts) >= 99
+    assert sum(r.reached for r in rollouts) >= 99
     assert all(scenario.obstacles.path_free(r.trajectory) for r in rollouts)
 
 
 def test_full_escape_reaches_the_goal_in_the_symmetric_trap_for_at_least_99_of_100_seeds() -> None:
     scenario = symmetric_trap()
     rollouts = roll_out(scenario.field(), scenario.start, SEEDS)
-    assert sum(r.success for r in rollouts) >= 99
+    assert sum(r.reached for r in rollouts) >= 99
 
 
 def test_noise_alone_stays_caught_in_the_two_cylinder_local_minimum() -> None:
     scenario = two_cylinder_trap()
     rollouts = roll_out(scenario.field(), scenario.start, range(10), EscapeSettings(random_walk=False))
-    assert not any(r.success for r in rollouts)
+    assert not any(r.reached for r in rollouts)
     for r in rollouts:
         assert "stalled" in r.reason
         assert -0.5 < r.trajectory[-1][0] < -0.16  # in the notch in front of the pair
@@ -53,7 +53,7 @@ def test_random_walk_escapes_the_local_minimum_and_the_simplified_path_is_near_s
     scenario = two_cylinder_trap()
     field = scenario.field()
     rollouts = roll_out(field, scenario.start, SEEDS)
-    reached = [r for r in rollouts if r.success]
+    reached = [r for r in rollouts if r.reached]
     assert len(reached) >= 99
     assert sum(r.walk_steps > 0 for r in rollouts) >= 99  # the escape was needed, not a lucky descent
     best = shortest_path(scenario.start, scenario.goal, scenario.obstacles).length_m
@@ -76,7 +76,6 @@ def test_a_seed_gives_the_same_trajectory_alone_or_in_a_batch() -> None:
 def test_plan_returns_a_simplified_path_with_headings() -> None:
     scenario = two_cylinder_trap()
     result = plan_potential_field(scenario.field(), (-1.5, 0.0, 0.3), seed=1)
-    assert result.success
     assert result.reason == "goal reached"
     np.testing.assert_array_equal(result.path[-1, :2], scenario.goal)
     assert result.path.shape[1] == 3
@@ -85,15 +84,14 @@ def test_plan_returns_a_simplified_path_with_headings() -> None:
     np.testing.assert_allclose(result.path[1:-1, 2], np.arctan2(step[1:, 1], step[1:, 0]))
     assert result.length_m == pytest.approx(path_length(result.path))
     assert result.iterations > result.nodes
-    assert result.first_solution_s is not None
+    assert result.first_solution_s == result.time_s
 
 
 def test_budget_exhaustion_is_a_failure_with_a_reason() -> None:
     scenario = two_cylinder_trap()
-    result = plan_potential_field(scenario.field(), (-1.5, 0.0, 0.0), seed=1, settings=EscapeSettings(max_steps=50))
-    assert not result.success
-    assert "budget" in result.reason
-    assert result.first_solution_s is None
+    with pytest.raises(NoPathFoundError, match=r"^step budget used up \(50 steps of 0.01 s\)") as caught:
+        plan_potential_field(scenario.field(), (-1.5, 0.0, 0.0), seed=1, settings=EscapeSettings(max_steps=50))
+    assert caught.value.iterations == 50
 
 
 def test_bad_requests_are_refused() -> None:

@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pytest
 
+from mrs_nav.errors import NoPathFoundError
 from mrs_nav.fields.randomized_potential_field import (
     NO_PATH,
     EscapeSettings,
@@ -41,7 +42,7 @@ def _check(scenario: Scenario, *, field_path_near_shortest: bool) -> None:
     field = scenario.field(robot_radius=BURGER_RADIUS)
     guide = navigation_guide(field, scenario.start)
     rollouts = roll_out(field, scenario.start, SEEDS, guide=guide)
-    assert all(r.success for r in rollouts), [(r.seed, r.reason) for r in rollouts if not r.success]
+    assert all(r.reached for r in rollouts), [(r.seed, r.reason) for r in rollouts if not r.reached]
     best = shortest_path(scenario.start, scenario.goal, field.obstacles).length_m  # exact, among the grown shapes
     own = []
     for r in rollouts:
@@ -81,14 +82,14 @@ def test_the_random_walk_alone_is_held_by_a_cup_and_a_u() -> None:
     """The problem the navigation function solves: without it, most seeds stay in these traps."""
     for scenario in (cylinder_cup(5), box_u()):
         rollouts = roll_out(scenario.field(robot_radius=BURGER_RADIUS), scenario.start, range(20), ASSIGNMENT)
-        assert sum(r.success for r in rollouts) <= 5
+        assert sum(r.reached for r in rollouts) <= 5
 
 
 def test_a_wall_gap_narrower_than_the_robot_is_not_taken() -> None:
     scenario = wall_with_gap(0.15, length=2.0)
     field = scenario.field(robot_radius=BURGER_RADIUS)
     for r in roll_out(field, scenario.start, SEEDS):
-        assert r.success
+        assert r.reached
         # The wall spans |y| <= 1 m at x = 0; the gap is at y = 0.5 m. Crossings happen beyond the wall's ends.
         cross = np.flatnonzero(np.diff(np.sign(r.trajectory[:, 0])) != 0)
         assert all(abs(r.trajectory[k, 1]) > 1.0 for k in cross)
@@ -98,21 +99,19 @@ def test_a_wall_gap_narrower_than_the_robot_is_not_taken() -> None:
 def test_a_goal_behind_a_door_narrower_than_the_robot_is_refused_cleanly() -> None:
     scenario = room_with_door(0.15)
     field = scenario.field(robot_radius=BURGER_RADIUS)
-    for r in roll_out(field, scenario.start, SEEDS):
-        assert not r.success
-        assert r.reason == NO_PATH
-        np.testing.assert_array_equal(r.trajectory, [scenario.start])
-    result = plan_potential_field(field, (*scenario.start, 0.0), seed=0)
-    assert not result.success
-    assert result.reason.startswith("no path")
-    assert result.first_solution_s is None
+    with pytest.raises(NoPathFoundError) as caught:
+        roll_out(field, scenario.start, SEEDS)
+    assert caught.value.reason == NO_PATH
+    with pytest.raises(NoPathFoundError, match=r"^no path: the obstacles, grown by the robot radius, close"):
+        plan_potential_field(field, (*scenario.start, 0.0), seed=0)
     # A point (no robot radius) fits through the same door: the refusal is the robot's size, not the planner.
-    assert plan_potential_field(scenario.field(), (*scenario.start, 0.0), seed=0).success
+    result = plan_potential_field(scenario.field(), (*scenario.start, 0.0), seed=0)
+    np.testing.assert_array_equal(result.path[-1, :2], scenario.goal)
 
 
 def test_a_door_the_robot_just_fits_through_is_taken() -> None:
     scenario = room_with_door(0.3)  # 4.5 cm to spare on each side
     field = scenario.field(robot_radius=BURGER_RADIUS)
     for r in roll_out(field, scenario.start, range(3)):
-        assert r.success
+        assert r.reached
         assert float(scenario.obstacles.signed_distance(r.trajectory).min()) >= BURGER_RADIUS

@@ -5,7 +5,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
+from mrs_nav.errors import NoPathFoundError
 from mrs_nav.maps.occupancy_grid import OCCUPIED, OccupancyGrid
 from mrs_nav.maps.wavefront import wavefront
 
@@ -46,7 +48,8 @@ def test_a_goal_walled_off_has_no_corridor_and_infinite_distance() -> None:
     values[30:34, 20] = OCCUPIED
     closed = OccupancyGrid(values, 0.1)
     wave = wavefront(closed, (3.05, 1.05), cell_m=0.1)
-    assert wave.corridor(np.array([1.05, 1.05])) is None
+    with pytest.raises(NoPathFoundError, match=r"the goal \(3.05, 1.05\) cannot be reached from \(1.05, 1.05\)"):
+        wave.corridor(np.array([1.05, 1.05]))
     assert math.isinf(float(wave.at(np.array([[1.05, 1.05]]))[0]))
 
 
@@ -54,5 +57,6 @@ def test_coarse_cells_are_free_only_when_all_their_cells_are_unless_optimistic()
     grid = _wall_with_gap()
     strict = wavefront(grid, (3.05, 1.05), cell_m=0.4)  # 4 x 4 blocks: the 0.4 m gap straddles two blocks
     loose = wavefront(grid, (3.05, 1.05), cell_m=0.4, optimistic=True)
-    assert strict.corridor(np.array([1.05, 1.05])) is None
-    assert loose.corridor(np.array([1.05, 1.05])) is not None
+    with pytest.raises(NoPathFoundError):
+        strict.corridor(np.array([1.05, 1.05]))
+    assert loose.corridor(np.array([1.05, 1.05])).shape[1] == 2

@@ -16,6 +16,7 @@ from mrs_nav.navigation.navigator import (
     EventKind,
     GoalState,
     NavCommand,
+    NavGoal,
     Navigator,
     NavigatorConfig,
     cell_centres,
@@ -81,7 +82,7 @@ def astar(grid: OccupancyGrid, start: Pose2D, goal: tuple[float, float], rng: np
     points[0] = (start.x, start.y)
     points[-1] = goal
     path = headings_along(points)
-    return PlanResult(True, path, path_length(path), time.perf_counter() - t0, 0.0, len(cost), len(cost), "found")
+    return PlanResult(path, path_length(path), time.perf_counter() - t0, 0.0, len(cost), len(cost), "found")
 
 
 def drive(nav: Navigator, pose: Pose2D, seconds: float, dt: float = 0.1, t0: float = 0.0) -> tuple[Pose2D, list]:
@@ -105,7 +106,7 @@ def test_goal_across_the_room_is_reached_within_tolerance_and_the_robot_stops() 
     nav = Navigator(astar, seed=1)
     grid = with_wall(arena(), -0.2, -0.2, 0.2, 0.2)
     nav.set_map(grid, 0.0)
-    assert kinds(nav.set_goal(1.5, 1.5, 0.0)) == [EventKind.ACCEPTED]
+    assert kinds(nav.set_goal(NavGoal(1.5, 1.5), 0.0)) == [EventKind.ACCEPTED]
     pose, events = drive(nav, Pose2D(-1.5, -1.5, 0.0), 120.0)
     assert nav.state is GoalState.REACHED
     assert math.hypot(pose.x - 1.5, pose.y - 1.5) <= 0.2
@@ -117,7 +118,6 @@ def test_goal_across_the_room_is_reached_within_tolerance_and_the_robot_stops() 
 @pytest.mark.parametrize(
     ("goal", "reason"),
     [
-        ((math.nan, 0.0), "not a finite number"),
         ((0.0, 0.0), "inside an obstacle"),
         ((0.27, 0.0), "robot radius + margin"),
         ((5.0, 0.0), "outside the map"),
@@ -126,7 +126,7 @@ def test_goal_across_the_room_is_reached_within_tolerance_and_the_robot_stops() 
 def test_bad_goals_are_refused_and_cause_no_motion(goal: tuple[float, float], reason: str) -> None:
     nav = Navigator(astar)
     nav.set_map(with_wall(arena(), -0.2, -0.2, 0.2, 0.2), 0.0)
-    (event,) = nav.set_goal(*goal, 0.0)
+    (event,) = nav.set_goal(NavGoal(*goal), 0.0)
     assert event.kind is EventKind.REFUSED
     assert reason in event.message
     assert nav.state is GoalState.IDLE
@@ -136,13 +136,26 @@ def test_bad_goals_are_refused_and_cause_no_motion(goal: tuple[float, float], re
 def test_a_goal_a_googol_away_is_refused_in_a_line_of_readable_length() -> None:
     nav = Navigator(astar)
     nav.set_map(arena(), 0.0)
-    (event,) = nav.set_goal(1e300, -1e300, 0.0)
+    (event,) = nav.set_goal(NavGoal(1e300, -1e300), 0.0)
     assert event.kind is EventKind.REFUSED
     assert event.message == "goal (1e+300, -1e+300) refused: it lies outside the map"
 
 
+@pytest.mark.parametrize(
+    ("x", "y", "yaw", "message"),
+    [
+        (math.nan, 0.0, None, r"goal \(nan, 0.0\): its position is not a finite number"),
+        (0.0, math.inf, None, "its position is not a finite number"),
+        (1.0, 2.0, math.nan, r"goal \(1.00, 2.00\): its heading is not a finite number"),
+    ],
+)
+def test_a_goal_is_finite_from_the_moment_it_is_made(x: float, y: float, yaw: float | None, message: str) -> None:
+    with pytest.raises(InvalidInputError, match=message):
+        NavGoal(x, y, yaw)
+
+
 def test_a_goal_before_any_map_is_refused() -> None:
-    (event,) = Navigator(astar).set_goal(1.0, 1.0, 0.0)
+    (event,) = Navigator(astar).set_goal(NavGoal(1.0, 1.0), 0.0)
     assert event.kind is EventKind.REFUSED
     assert "no map" in event.message
 
@@ -151,13 +164,13 @@ def test_unknown_space_is_planned_through_only_when_allowed() -> None:
     grid = arena(unknown=True)
     nav = Navigator(astar)
     nav.set_map(grid, 0.0)
-    assert kinds(nav.set_goal(1.5, 1.5, 0.0)) == [EventKind.ACCEPTED]
+    assert kinds(nav.set_goal(NavGoal(1.5, 1.5), 0.0)) == [EventKind.ACCEPTED]
     cmd = nav.update(Pose2D(-1.5, -1.5, 0.0), 0.0)
     assert cmd.path is not None
     assert cmd.u > 0.0
     strict = Navigator(astar, NavigatorConfig(allow_unknown=False))
     strict.set_map(grid, 0.0)
-    (event,) = strict.set_goal(1.5, 1.5, 0.0)
+    (event,) = strict.set_goal(NavGoal(1.5, 1.5), 0.0)
     assert event.kind is EventKind.REFUSED
     assert "unknown" in event.message
 
@@ -165,8 +178,8 @@ def test_unknown_space_is_planned_through_only_when_allowed() -> None:
 def test_a_bad_goal_does_not_cancel_the_running_one() -> None:
     nav = Navigator(astar)
     nav.set_map(arena(), 0.0)
-    nav.set_goal(1.5, 1.5, 0.0)
-    nav.set_goal(math.inf, 0.0, 0.0)
+    nav.set_goal(NavGoal(1.5, 1.5), 0.0)
+    assert kinds(nav.set_goal(NavGoal(5.0, 0.0), 0.0)) == [EventKind.REFUSED]
     assert nav.state is GoalState.ACTIVE
     assert nav.goal == (1.5, 1.5)
 
@@ -174,7 +187,7 @@ def test_a_bad_goal_does_not_cancel_the_running_one() -> None:
 def test_a_map_revealing_a_wall_on_the_path_makes_a_new_plan_around_it() -> None:
     nav = Navigator(astar, NavigatorConfig(replan_period_s=1e9))
     nav.set_map(arena(unknown=True), 0.0)
-    nav.set_goal(1.5, -1.5, 0.0)
+    nav.set_goal(NavGoal(1.5, -1.5), 0.0)
     pose = Pose2D(-1.5, -1.5, 0.0)
     first = nav.update(pose, 0.0).path
     assert first is not None
@@ -191,7 +204,7 @@ def test_a_map_revealing_a_wall_on_the_path_makes_a_new_plan_around_it() -> None
 def test_a_new_map_that_leaves_the_path_clear_keeps_it() -> None:
     nav = Navigator(astar, NavigatorConfig(replan_period_s=1e9))
     nav.set_map(arena(unknown=True), 0.0)
-    nav.set_goal(1.5, -1.5, 0.0)
+    nav.set_goal(NavGoal(1.5, -1.5), 0.0)
     pose = Pose2D(-1.5, -1.5, 0.0)
     assert nav.update(pose, 0.0).path is not None
     nav.set_map(with_wall(arena(unknown=True), 0.0, 1.0, 0.1, 1.5), 0.5)  # far from the path
@@ -201,7 +214,7 @@ def test_a_new_map_that_leaves_the_path_clear_keeps_it() -> None:
 def test_straying_from_the_path_triggers_a_new_plan() -> None:
     nav = Navigator(astar, NavigatorConfig(replan_period_s=1e9, stray_distance_m=0.3))
     nav.set_map(arena(), 0.0)
-    nav.set_goal(1.5, -1.5, 0.0)
+    nav.set_goal(NavGoal(1.5, -1.5), 0.0)
     assert nav.update(Pose2D(-1.5, -1.5, 0.0), 0.0).path is not None
     assert nav.update(Pose2D(-1.0, -1.3, 0.0), 0.1).path is None  # 0.2 m off: tolerated
     cmd = nav.update(Pose2D(-1.0, -1.0, 0.0), 0.2)
@@ -227,7 +240,7 @@ class ScriptedPlanner:
         direction = np.subtract(goal, [start.x, start.y]) / (2.0 * half)
         mid = mid + side * np.array([-direction[1], direction[0]])
         path = headings_along(np.array([[start.x, start.y], mid, goal]))
-        return PlanResult(True, path, path_length(path), 0.001, 0.001, 1, 3, "found")
+        return PlanResult(path, path_length(path), 0.001, 0.001, 1, 3, "found")
 
 
 def test_periodic_plans_replace_the_path_only_when_clearly_shorter() -> None:
@@ -235,7 +248,7 @@ def test_periodic_plans_replace_the_path_only_when_clearly_shorter() -> None:
     config = NavigatorConfig(replan_period_s=2.0, improvement_ratio=0.85, stray_distance_m=1.0, plan_turned_round=False)
     nav = Navigator(planner, config)
     nav.set_map(arena(), 0.0)
-    nav.set_goal(1.5, -1.5, 0.0)
+    nav.set_goal(NavGoal(1.5, -1.5), 0.0)
     pose = Pose2D(-1.5, -1.5, 0.0)
     assert nav.update(pose, 0.0).path is not None
     assert nav.update(pose, 2.5).path is None  # period over but the map did not change: no plan
@@ -260,7 +273,7 @@ def test_repeated_planning_failures_end_the_goal_as_failed(deferred: bool) -> No
     config = NavigatorConfig(max_failed_plans=3, retry_delay_s=1.0, recovery=RecoveryConfig(behaviors=()))
     nav = Navigator(never, config)
     nav.set_map(arena(), 0.0)
-    nav.set_goal(1.5, 1.5, 0.0)
+    nav.set_goal(NavGoal(1.5, 1.5), 0.0)
     start = Pose2D(-1.5, -1.5, 0.0)
     pose, events = drive_deferred(nav, start, 10.0, latency=3) if deferred else drive(nav, start, 10.0)
     assert nav.state is GoalState.FAILED
@@ -273,7 +286,7 @@ def test_a_goal_walled_off_is_reported_failed_not_chased() -> None:
     grid = with_wall(arena(), -2.0, 0.9, 2.0, 1.0)  # a wall right across the room
     nav = Navigator(astar, NavigatorConfig(max_failed_plans=2, recovery=RecoveryConfig(behaviors=())))
     nav.set_map(grid, 0.0)
-    nav.set_goal(1.5, 1.5, 0.0)
+    nav.set_goal(NavGoal(1.5, 1.5), 0.0)
     drive(nav, Pose2D(-1.5, -1.5, 0.0), 10.0)
     assert nav.state is GoalState.FAILED
 
@@ -281,10 +294,10 @@ def test_a_goal_walled_off_is_reported_failed_not_chased() -> None:
 def test_a_new_goal_preempts_the_current_one() -> None:
     nav = Navigator(astar)
     nav.set_map(arena(), 0.0)
-    nav.set_goal(1.5, 1.5, 0.0)
+    nav.set_goal(NavGoal(1.5, 1.5), 0.0)
     pose, _ = drive(nav, Pose2D(-1.5, -1.5, 0.0), 3.0)
     assert nav.state is GoalState.ACTIVE
-    events = nav.set_goal(-1.5, 1.5, 3.0)
+    events = nav.set_goal(NavGoal(-1.5, 1.5), 3.0)
     assert kinds(events) == [EventKind.PREEMPTED, EventKind.ACCEPTED]
     cmd = nav.update(pose, 3.0)
     assert cmd.path is not None
@@ -297,7 +310,7 @@ def test_a_new_goal_preempts_the_current_one() -> None:
 def test_lost_pose_or_stale_map_stops_the_robot_and_it_resumes() -> None:
     nav = Navigator(astar, NavigatorConfig(map_timeout_s=5.0))
     nav.set_map(arena(), 0.0)
-    nav.set_goal(1.5, 1.5, 0.0)
+    nav.set_goal(NavGoal(1.5, 1.5), 0.0)
     pose = Pose2D(-1.5, -1.5, 0.0)
     assert nav.update(pose, 0.0).u > 0.0
     lost = nav.update(None, 0.1)
@@ -318,7 +331,7 @@ def test_lost_pose_or_stale_map_stops_the_robot_and_it_resumes() -> None:
 def test_a_robot_inside_the_inflation_of_a_wall_can_still_plan_out() -> None:
     nav = Navigator(astar)
     nav.set_map(arena(), 0.0)
-    nav.set_goal(0.0, 0.0, 0.0)
+    nav.set_goal(NavGoal(0.0, 0.0), 0.0)
     cmd = nav.update(Pose2D(-1.88, 0.0, 0.0), 0.0)  # 0.07 m from the wall face, inside the 0.105 m inflation
     assert cmd.path is not None
     assert cmd.u > 0.0
@@ -338,11 +351,11 @@ def test_a_goal_behind_the_robot_is_planned_from_the_robot_turned_round() -> Non
         path = headings_along(np.array([[start.x, start.y], goal]))
         path[0, 2] = start.yaw
         extra = 0.0 if ahead > 0.0 else 2.0 * math.pi * 0.3
-        return PlanResult(True, path, path_length(path) + extra, 0.001, 0.001, 1, 2, "found")
+        return PlanResult(path, path_length(path) + extra, 0.001, 0.001, 1, 2, "found")
 
     nav = Navigator(forward_only)
     nav.set_map(arena(), 0.0)
-    nav.set_goal(-1.0, 0.0, 0.0)
+    nav.set_goal(NavGoal(-1.0, 0.0), 0.0)
     cmd = nav.update(Pose2D(1.0, 0.0, 0.0), 0.0)
     assert cmd.path is not None
     assert abs(cmd.path[0, 2]) == pytest.approx(math.pi)
@@ -371,7 +384,7 @@ def drive_deferred(nav: Navigator, pose: Pose2D, seconds: float, latency: int, d
 def test_deferred_planning_reaches_the_goal_like_synchronous_planning() -> None:
     nav = Navigator(astar, NavigatorConfig(replan_period_s=2.0), seed=1)
     nav.set_map(with_wall(arena(), -0.2, -0.2, 0.2, 0.2), 0.0)
-    nav.set_goal(1.5, 1.5, 0.0)
+    nav.set_goal(NavGoal(1.5, 1.5), 0.0)
     pose, events = drive_deferred(nav, Pose2D(-1.5, -1.5, 0.0), 120.0, latency=5)
     assert nav.state is GoalState.REACHED
     assert math.hypot(pose.x - 1.5, pose.y - 1.5) <= 0.2
@@ -383,7 +396,7 @@ def test_a_deferred_plan_keeps_the_robot_following_its_path_until_adopted() -> N
     config = NavigatorConfig(replan_period_s=2.0, stray_distance_m=1.0, plan_turned_round=False)
     nav = Navigator(planner, config)
     nav.set_map(arena(), 0.0)
-    nav.set_goal(1.5, -1.5, 0.0)
+    nav.set_goal(NavGoal(1.5, -1.5), 0.0)
     pose = Pose2D(-1.5, -1.5, 0.0)
     first = nav.update(pose, 0.0, defer=True)
     assert first.request is not None
@@ -413,7 +426,7 @@ def blocked_ahead(planner) -> tuple[Navigator, NavCommand, float]:
     first enters the wall's inflation."""
     nav = Navigator(planner, NavigatorConfig(replan_period_s=1e9, plan_turned_round=False))
     nav.set_map(arena(), 0.0)
-    nav.set_goal(1.5, -1.5, 0.0)
+    nav.set_goal(NavGoal(1.5, -1.5), 0.0)
     first = nav.update(Pose2D(-1.5, -1.5, 0.0), 0.0, defer=True).request
     assert first is not None
     assert nav.finish_plan(first, nav.run_plan(first)).path is not None
@@ -457,12 +470,12 @@ def test_a_blocked_path_whose_replacement_fails_is_not_followed_on() -> None:
 def test_a_new_goal_discards_the_plan_in_flight_for_the_old_one() -> None:
     nav = Navigator(astar)
     nav.set_map(arena(), 0.0)
-    nav.set_goal(1.5, 1.5, 0.0)
+    nav.set_goal(NavGoal(1.5, 1.5), 0.0)
     pose = Pose2D(-1.5, -1.5, 0.0)
     old = nav.update(pose, 0.0, defer=True).request
     assert old is not None
     assert nav.planning
-    nav.set_goal(-1.5, 1.5, 0.5)
+    nav.set_goal(NavGoal(-1.5, 1.5), 0.5)
     assert not nav.planning
     stale = nav.finish_plan(old, nav.run_plan(old))
     assert stale == NavCommand(0.0, 0.0)
@@ -478,7 +491,7 @@ def test_a_new_goal_discards_the_plan_in_flight_for_the_old_one() -> None:
 def test_a_goal_with_a_heading_ends_within_the_move_base_tolerances() -> None:
     nav = Navigator(astar, seed=1)
     nav.set_map(with_wall(arena(), -0.2, -0.2, 0.2, 0.2), 0.0)
-    assert kinds(nav.set_goal(1.5, 1.5, 0.0, yaw=math.pi / 2)) == [EventKind.ACCEPTED]
+    assert kinds(nav.set_goal(NavGoal(1.5, 1.5, math.pi / 2), 0.0)) == [EventKind.ACCEPTED]
     pose, events = drive(nav, Pose2D(-1.5, -1.5, 0.0), 120.0)
     assert nav.state is GoalState.REACHED
     tolerances = nav.config.approach
@@ -493,10 +506,10 @@ def test_a_goal_inside_an_unseen_obstacle_is_refused() -> None:
     values[31:49, 31:49] = UNKNOWN  # ... and its inside never
     nav = Navigator(astar)
     nav.set_map(OccupancyGrid(values, RES, (-2.0, -2.0, 0.0)), 0.0)
-    (event,) = nav.set_goal(0.0, 0.0, 0.0)
+    (event,) = nav.set_goal(NavGoal(0.0, 0.0), 0.0)
     assert event.kind is EventKind.REFUSED
     assert "inside of an obstacle" in event.message
-    assert kinds(nav.set_goal(1.5, 1.5, 0.0)) == [EventKind.ACCEPTED]
+    assert kinds(nav.set_goal(NavGoal(1.5, 1.5), 0.0)) == [EventKind.ACCEPTED]
 
 
 def scan(world: OccupancyGrid, pose: Pose2D, beams: int = 180, max_range: float = 3.5):
@@ -539,7 +552,7 @@ def test_an_obstacle_seen_but_not_on_the_map_is_planned_around_without_contact()
     mapped = with_wall(room, -0.05, 1.3, 0.05, 2.0)
     nav = Navigator(astar, seed=2)
     nav.set_map(mapped, 0.0)
-    nav.set_goal(-0.5, -1.2, 0.0)
+    nav.set_goal(NavGoal(-0.5, -1.2), 0.0)
     first = nav.update(Pose2D(-1.6, -1.2, 0.0), 0.0).path
     assert first is not None
     assert mapped.is_free(densify(first, RES)).all()
@@ -585,7 +598,7 @@ def test_on_a_static_map_a_wall_in_unknown_space_is_driven_around_without_contac
     world = with_wall(arena(), -0.05, -2.0, 0.05, 0.9)  # a wall with a gap at the top, unknown on the map
     nav = Navigator(astar, NavigatorConfig(mark_unknown=True), seed=2)
     nav.set_map(arena(unknown=True), 0.0)
-    nav.set_goal(1.0, -1.2, 0.0)
+    nav.set_goal(NavGoal(1.0, -1.2), 0.0)
     pose, least = drive_with_scans(nav, world, Pose2D(-1.6, -1.2, 0.0), 300.0)
     assert nav.state is GoalState.REACHED
     assert least > BURGER_RADIUS
@@ -595,7 +608,7 @@ def test_on_a_static_map_a_wall_in_unknown_space_is_driven_around_without_contac
 def test_a_return_right_ahead_stops_the_robot_and_makes_a_new_plan() -> None:
     nav = Navigator(astar)
     nav.set_map(arena(), 0.0)
-    nav.set_goal(1.5, 0.0, 0.0)
+    nav.set_goal(NavGoal(1.5, 0.0), 0.0)
     pose = Pose2D(-1.5, 0.0, 0.0)
     assert nav.update(pose, 0.0).u > 0.0
     nav.set_scan(*scan(with_wall(arena(), -1.36, -0.1, -1.3, 0.1), pose))  # 0.14 m ahead of the centre
@@ -617,7 +630,7 @@ def test_return_ahead_looks_only_into_the_robots_way() -> None:
 def test_a_hold_from_the_caller_stops_the_robot_and_it_resumes() -> None:
     nav = Navigator(astar)
     nav.set_map(arena(), 0.0)
-    nav.set_goal(1.5, 1.5, 0.0)
+    nav.set_goal(NavGoal(1.5, 1.5), 0.0)
     pose = Pose2D(-1.5, -1.5, 0.0)
     assert nav.update(pose, 0.0).u > 0.0
     stale = "the map->odom correction is older than 0.30 s"

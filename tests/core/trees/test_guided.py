@@ -7,9 +7,10 @@ import itertools
 import numpy as np
 import pytest
 
+from mrs_nav.errors import NoPathFoundError
 from mrs_nav.maps.occupancy_grid import OccupancyGrid, planning_grid
 from mrs_nav.trees import arcs
-from mrs_nav.trees.rrt_star import RRTStarConfig, grow_rrt_star
+from mrs_nav.trees.rrt_star import RRTStarConfig, grow_rrt_star, rrt_star
 from mrs_nav.trees.scenarios import OFFICE_GOALS, OFFICE_START, building_grid, office_grid
 
 
@@ -27,15 +28,18 @@ def office() -> OccupancyGrid:
 def test_guided_rrt_star_crosses_the_office_in_few_iterations_where_uniform_sampling_does_not(
     office: OccupancyGrid,
 ) -> None:
-    guided, uniform = [], []
+    guided, uniform_found = [], 0
     for seed, goal in enumerate(OFFICE_GOALS):
-        for bias, out in ((0.7, guided), (0.0, uniform)):
-            config = RRTStarConfig(iterations=150, time_budget=None, stop_at_first=True, guide_bias=bias)
-            result = grow_rrt_star(OFFICE_START, np.array(goal), office, config, np.random.default_rng(seed)).result
-            out.append(result)
-    assert all(r.success for r in guided)
+        config = RRTStarConfig(iterations=150, time_budget=None, stop_at_first=True, guide_bias=0.7)
+        guided.append(rrt_star(OFFICE_START, np.array(goal), office, config, np.random.default_rng(seed)))
+        config = RRTStarConfig(iterations=150, time_budget=None, stop_at_first=True, guide_bias=0.0)
+        try:
+            rrt_star(OFFICE_START, np.array(goal), office, config, np.random.default_rng(seed))
+        except NoPathFoundError:
+            continue
+        uniform_found += 1
     assert all(_valid(r.path, office) for r in guided)
-    assert sum(r.success for r in uniform) <= 1
+    assert uniform_found <= 1
 
 
 def test_guided_rrt_star_crosses_a_building_of_25_offices() -> None:
@@ -45,7 +49,6 @@ def test_guided_rrt_star_crosses_a_building_of_25_offices() -> None:
     goal = np.array([5.0 + 4 * tile, 5.0 + 4 * tile])  # the north-east office, about 125 m away
     config = RRTStarConfig(iterations=1500, time_budget=None, stop_at_first=True)
     result = grow_rrt_star(OFFICE_START, goal, grid, config, np.random.default_rng(0)).result
-    assert result.success
     assert _valid(result.path, grid)
     assert result.length_m > 160.0  # doors and rooms in the way: longer than the 130 m diagonal
 
