@@ -647,7 +647,7 @@ def test_a_hold_from_the_caller_stops_the_robot_and_it_resumes() -> None:
 def test_a_goal_reached_on_a_pose_in_doubt_fails_with_the_reason() -> None:
     nav = Navigator(astar, seed=1)
     nav.set_map(arena(), 0.0)
-    nav.set_goal(-1.3, -1.5, 0.0)
+    nav.set_goal(NavGoal(-1.3, -1.5), 0.0)
     pose, now, events = Pose2D(-1.5, -1.5, 0.0), 0.0, []
     while now < 20.0 and nav.state is GoalState.ACTIVE:
         cmd = nav.update(pose, now, doubt="the localisation is not confident")

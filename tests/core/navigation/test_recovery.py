@@ -10,6 +10,7 @@ import pytest
 from mrs_nav.errors import InvalidInputError, NoPathFoundError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
+from mrs_nav.navigation.goal import NavGoal
 from mrs_nav.navigation.navigator import EventKind, GoalState, Navigator, NavigatorConfig
 from mrs_nav.navigation.recovery import RecoveryBehavior, RecoveryConfig
 from mrs_nav.planning import PlanResult
@@ -24,7 +25,7 @@ def test_failed_plans_run_conservative_clear_rotation_aggressive_clear_then_abor
     nav = Navigator(never, NavigatorConfig(max_failed_plans=2, retry_delay_s=0.5))
     nav.set_map(arena(), 0.0)
     nav.set_scan([-1.5, -1.5], [[-1.0, -1.5], [1.5, -1.5]], [True, False])  # one mark 0.5 m from the robot
-    nav.set_goal(1.5, 1.5, 0.0)
+    nav.set_goal(NavGoal(1.5, 1.5), 0.0)
     pose, events = drive(nav, Pose2D(-1.5, -1.5, 0.0), 60.0)
     assert nav.state is GoalState.FAILED
     recoveries = [e.message for e in events if e.kind is EventKind.RECOVERY]
@@ -51,7 +52,7 @@ def test_a_goal_blocked_only_by_stale_marks_is_reached_after_a_clear() -> None:
     ys = np.arange(-1.95, 1.96, 0.025)
     nav.set_scan([0.5, 0.0], np.column_stack((np.full_like(ys, 0.5), ys)), np.ones(ys.size, dtype=bool))
     nav.set_scan([-1.5, 0.0], [[-1.9, 0.0]], [False])  # the robot's own scan: nothing ahead
-    nav.set_goal(1.5, 0.0, 0.0)
+    nav.set_goal(NavGoal(1.5, 0.0), 0.0)
     _pose, events = drive(nav, Pose2D(-1.5, 0.0, 0.0), 120.0)
     assert nav.state is GoalState.REACHED, [e.message for e in events]
     assert [e.message.split(" (")[1].split(")")[0] for e in events if e.kind is EventKind.RECOVERY] == [
@@ -65,7 +66,7 @@ def test_no_progress_runs_the_recoveries_then_aborts() -> None:
     grid = arena()
     nav = Navigator(astar, NavigatorConfig(progress_timeout_s=5.0), seed=1)
     nav.set_map(grid, 0.0)
-    nav.set_goal(1.5, 1.5, 0.0)
+    nav.set_goal(NavGoal(1.5, 1.5), 0.0)
     pose, events, now = Pose2D(-1.5, -1.5, 0.0), [], 0.0
     while now < 60.0 and nav.state is GoalState.ACTIVE:  # the wheels spin but the robot never moves
         cmd = nav.update(pose, now)
@@ -99,7 +100,7 @@ def test_recoveries_follow_move_base_switches() -> None:
 def test_without_recoveries_failed_plans_abort_at_once() -> None:
     nav = Navigator(never, NavigatorConfig(max_failed_plans=1, recovery=RecoveryConfig(behaviors=())))
     nav.set_map(with_wall(arena(), 0.0, 0.0, 0.1, 0.1), 0.0)
-    nav.set_goal(1.5, 1.5, 0.0)
+    nav.set_goal(NavGoal(1.5, 1.5), 0.0)
     _, events = drive(nav, Pose2D(-1.5, -1.5, 0.0), 5.0)
     assert kinds(events) == [EventKind.PLAN_FAILED, EventKind.FAILED]
     assert "after recoveries" not in events[-1].message
