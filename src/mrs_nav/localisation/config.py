@@ -54,6 +54,9 @@ class LocalisationConfig:
     min_effective_fraction: float = 0.1  # scan likelihood tempered to keep this share of particles effective
     recovery_alpha_slow: float = 0.001  # decay of the slow average likelihood (0 disables recovery)
     recovery_alpha_fast: float = 0.1  # decay of the fast average likelihood
+    recovery_radius: float = 1.0  # m, random particles this near the estimate while confident (0: anywhere)
+    confident_max_sd_xy: float = 0.6  # m, widest position std dev of a confident estimate
+    confident_max_sd_yaw: float = 0.35  # rad, heading std dev of a confident estimate
     initial_pose_x: float = 0.0  # m
     initial_pose_y: float = 0.0  # m
     initial_pose_a: float = 0.0  # rad
@@ -102,6 +105,9 @@ class LocalisationConfig:
             "initial_cov_xx",
             "initial_cov_yy",
             "initial_cov_aa",
+            "recovery_radius",
+            "confident_max_sd_xy",
+            "confident_max_sd_yaw",
         )
         for name in non_negative:
             if getattr(self, name) < 0.0:
