@@ -13,7 +13,7 @@ Each filter update (once the odometry has moved ``update_min_d`` or turned ``upd
    a passing misfit then searches nearby instead of inviting a look-alike elsewhere (issue 38),
 
 4. takes the estimate from the dominant cluster (heaviest place, then heaviest heading there), never the mean
-   of two, and calls it confident only when that cluster holds most of the weight, is narrow and the scans
+   of two, and calls it confident only when that cluster holds 90 % of the weight, is narrow and the scans
    still fit (:meth:`ParticleFilter.estimate`).
 
 The fit of a scan is the per-beam geometric mean of the weighted average likelihood: it lies in (0, ~z_hit] and
@@ -40,7 +40,10 @@ from mrs_nav.motion_model import OdometryNoise, decompose
 _CLUSTER_RADIUS = 0.75  # m: particles this close to the heaviest bin's mean make the pose estimate
 _CLUSTER_SECTOR = math.pi / 4.0  # rad: headings are grouped in sectors this wide to find the dominant heading
 _CLUSTER_HEADING = math.pi / 3.0  # rad: particles this close to the dominant heading make the pose estimate
-_UNCERTAIN_SHARE = 0.5  # a dominant mode with less of the weight than this leaves the pose unknown
+# A dominant cluster with less of the weight than this is not a confident estimate: the office's look-alike
+# corridors keep two or more modes alive for a while after a global spread, and one that holds barely half of
+# the weight is as likely the wrong one (the sharp model then locked global localisation onto it).
+_CONFIDENT_SHARE = 0.9
 _LOST_FIT = 0.5  # the fast average fit below this share of the slow one: the scans no longer fit the belief
 # Odometry 10,000 km from its origin is a broken message (a tf of 1e300): the motion model's squares overflow.
 MAX_ODOM_M = 1e7
@@ -117,6 +120,7 @@ class ParticleFilter:
         if self._free_cells.size == 0:
             raise InvalidInputError("localisation needs a map with at least one free cell")
         self._fields: dict[float, LikelihoodField] = {}
+        self._given = False  # the cloud is a given pose (set_pose) not yet confirmed or refuted by the scans
         self._last_odom: Pose2D | None = None
         self._updates = 0
         self._w_slow = 0.0
@@ -165,10 +169,12 @@ class ParticleFilter:
             draws = self._rng.standard_normal((n, 3)) * np.sqrt(np.diag(cov))
         particles = draws + np.array([pose.x, pose.y, pose.yaw])
         particles[:, 2] = wrap_angles(particles[:, 2])
+        self._given = True
         self._reset(particles)
 
     def global_localisation(self) -> None:
         """Spread ``max_particles`` uniformly over the map's free space (AMCL's ``global_localization``)."""
+        self._given = False
         self._reset(self._random_poses(self.config.max_particles))
 
     def _reset(self, particles: FloatArray) -> None:
@@ -247,10 +253,12 @@ class ParticleFilter:
 
     def estimate(self) -> PoseEstimate:
         """The pose estimate after the last update (or reset): the weighted mean and covariance of the dominant
-        cluster, never the mean of two. It is ``confident`` when that cluster holds at least half of the
-        weight, its standard deviations are within ``confident_max_sd_xy`` (widest axis) and
-        ``confident_max_sd_yaw``, and the scans still fit (the fast average fit is at least half of the slow
-        one, i.e. :attr:`recovery_fraction` < 0.5)."""
+        cluster, never the mean of two. It is ``confident`` when its standard deviations are within
+        ``confident_max_sd_xy`` (widest axis) and ``confident_max_sd_yaw``, the scans still fit (the fast
+        average fit is at least half of the slow one, i.e. :attr:`recovery_fraction` < 0.5), and either that
+        cluster holds at least 90 % of the weight or the cloud is a pose given by :meth:`set_pose` (a 2D Pose
+        Estimate, the initial pose) that the scans have neither confirmed nor refuted yet: the user's word
+        stands until then, not a global search's first guess."""
         return self._estimate
 
     def _cluster(self, w: FloatArray) -> npt.NDArray[np.bool_]:
@@ -285,12 +293,15 @@ class ParticleFilter:
         d[:, 2] = wrap_angles(d[:, 2])
         cov = (d * wn[:, None]).T @ d
         c = self.config
-        confident = (
-            share >= _UNCERTAIN_SHARE
-            and float(np.linalg.eigvalsh(cov[:2, :2])[-1]) <= c.confident_max_sd_xy**2
+        narrow = (
+            float(np.linalg.eigvalsh(cov[:2, :2])[-1]) <= c.confident_max_sd_xy**2
             and float(cov[2, 2]) <= c.confident_max_sd_yaw**2
-            and self.recovery_fraction < 1.0 - _LOST_FIT
         )
+        fits = self.recovery_fraction < 1.0 - _LOST_FIT
+        confirmed = share >= _CONFIDENT_SHARE and narrow and fits
+        # A given pose counts as confident until the scans confirm it (then the rule alone holds) or refute it.
+        confident = confirmed or (self._given and narrow and fits)
+        self._given &= fits and not confirmed
         return PoseEstimate(Pose2D(float(mean[0]), float(mean[1]), wrap_angle(mean_yaw)), cov, share, confident)
 
     # -- updating -----------------------------------------------------------------------------------------------
@@ -348,7 +359,7 @@ class ParticleFilter:
         c, s = (v[:, None] for v in cos_sin(p[:, 2]))
         xs = p[:, 0, None] + c * ex - s * ey
         ys = p[:, 1, None] + s * ex + c * ey
-        beams, fit_beams = model.log_likelihood(xs, ys, self._sigma())
+        beams, fit_beams = model.log_likelihood(xs, ys, self._sigma(), self.config.laser_sigma_hit)
         log_p = beams.sum(axis=1)
         prior = self._log_weights - logsumexp(self._log_weights)
         fit = math.exp(float(logsumexp(prior + fit_beams.sum(axis=1))) / ex.size)

@@ -13,9 +13,9 @@ one: the estimate jumped 2.3 m into a room the mapping drive never saw. With the
 explains the scan by known walls beats one that explains it by unknown space, and unknown beams cost the true
 pose nothing against its neighbours, which see the same unknown cells.
 
-:meth:`LikelihoodField.log_likelihood` also returns the endpoints' scores with unknown ones counted as perfect
-hits: the filter's measure of how well the scans fit (which calls in random particles when it falls) must not
-fall because the robot looks into a room the map does not know.
+:meth:`LikelihoodField.log_likelihood` also returns the endpoints' scores at a fixed spread with unknown ones
+counted as perfect hits: the filter's measure of how well the scans fit (which calls in random particles when it
+falls) must not fall because the robot looks into a room the map does not know.
 
 The distance transform (``scipy.ndimage.distance_transform_edt``) is computed once per map and ``log p`` per
 cell once per ``sigma``, so scoring is one table lookup per particle and beam.
@@ -59,14 +59,19 @@ class LikelihoodField:
             table = self._tables[sigma] = table.astype(np.float32)
         return table
 
-    def log_likelihood(self, xs: FloatArray, ys: FloatArray, sigma: float) -> tuple[FloatArray, FloatArray]:
-        """``log p`` of endpoints at ``xs``, ``ys`` (any equal shapes, metres in the map frame), and the same
-        with endpoints in unknown space scored as perfect hits (for the fit: see the module docstring)."""
+    def log_likelihood(
+        self, xs: FloatArray, ys: FloatArray, sigma: float, fit_sigma: float
+    ) -> tuple[FloatArray, FloatArray]:
+        """``log p`` of endpoints at ``xs``, ``ys`` (any equal shapes, metres in the map frame) at ``sigma``, and
+        at ``fit_sigma`` with endpoints in unknown space scored as perfect hits (for the fit: see the module
+        docstring; one spread for it, whatever the weighting uses, so that the fit of one scan compares with
+        the last's)."""
         g = self.grid
         col = np.floor((xs - g.origin[0]) / g.resolution).astype(np.intp)
         row = np.floor((ys - g.origin[1]) / g.resolution).astype(np.intp)
         inside = (col.view(np.uintp) < g.width) & (row.view(np.uintp) < g.height)
         flat = np.where(inside, row * g.width + col, self._off_map)
         log_p = np.asarray(self._table(sigma).take(flat), dtype=np.float64)
-        perfect = float(self.log_p(np.array(0.0), sigma))
-        return log_p, np.where(self._unknown.take(flat), perfect, log_p)
+        fit = np.asarray(self._table(fit_sigma).take(flat), dtype=np.float64)
+        perfect = float(self.log_p(np.array(0.0), fit_sigma))
+        return log_p, np.where(self._unknown.take(flat), perfect, fit)

@@ -100,6 +100,7 @@ def test_the_estimate_is_the_heaviest_heading_mode_not_the_mean_of_two() -> None
     estimate = pf.estimate()
     assert abs(estimate.pose.yaw) < 0.01  # before: 34 deg, between the two
     assert estimate.share == pytest.approx(0.6)
+    assert not estimate.confident  # the best cluster holds too little of the weight
 
 
 def test_confidence_follows_the_cloud() -> None:
