@@ -5,7 +5,8 @@ All runs use the core simulator (360-beam scans with 1 cm noise, 1 % wheel odome
 corridor loop by pure pursuit on the true pose, and the filter on the office map rasterised at 5 cm. CPU is the
 process time of one filter update (motion, weighting, resampling, estimate). Targets (issue 14): tracking
 <= 3 cm and <= 1 deg RMS over 2 minutes; from 0.5 m / 30 deg off, converged (< 10 cm) within 5 s; global
-localisation converged within 60 s in >= 9 of 10 seeds; a kidnapped robot found again within 60 s.
+localisation converged within 60 s in >= 9 of 10 seeds; a kidnapped robot found again within 60 s. Then the
+saved-map runs of :mod:`mrs_nav.bench.localisation_saved_map` (issue 38).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from mrs_nav.bench.localisation_saved_map import saved_map_section
 from mrs_nav.bench.results import markdown_table
 from mrs_nav.geometry import Pose2D
 from mrs_nav.localisation import LocalisationConfig
@@ -46,6 +48,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--kidnap-seeds", type=runs_option, default=12, help="seeds of the kidnapping runs, from 1 (default: 12)"
     )
+    parser.add_argument(
+        "--saved-map-seeds",
+        type=runs_option,
+        default=20,
+        help="seeds per start of the saved-map runs, from 1 (default: 20)",
+    )
+    parser.add_argument(
+        "--saved-map-only", action="store_true", help="run the saved-map section alone (issue 38's figures)"
+    )
 
 
 def _fmt(value: float | None) -> str:
@@ -54,6 +65,9 @@ def _fmt(value: float | None) -> str:
 
 def run(args: argparse.Namespace) -> str:
     world = load_world(WORLDS_DIR / "office.world")
+    saved_map = saved_map_section(world, args.saved_map_seeds)
+    if args.saved_map_only:
+        return saved_map
     grid = rasterize_world(world, 0.05, margin=0.5)
     base = LocalisationConfig()
 
@@ -69,7 +83,7 @@ def run(args: argparse.Namespace) -> str:
             **kwargs,
         )
 
-    return _fixed_counts(drive, base) + "\n" + _defaults(drive, base, args.seeds, args.kidnap_seeds)
+    return _fixed_counts(drive, base) + "\n" + _defaults(drive, base, args.seeds, args.kidnap_seeds) + "\n" + saved_map
 
 
 def _fixed_counts(drive: Drive, base: LocalisationConfig) -> str:

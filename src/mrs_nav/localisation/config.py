@@ -60,6 +60,9 @@ class LocalisationConfig:
     min_effective_fraction: float = _default("min_effective_fraction")
     recovery_alpha_slow: float = _default("recovery_alpha_slow")
     recovery_alpha_fast: float = _default("recovery_alpha_fast")
+    recovery_radius: float = _default("recovery_radius")
+    confident_max_sd_xy: float = _default("confident_max_sd_xy")
+    confident_max_sd_yaw: float = _default("confident_max_sd_yaw")
     initial_pose_x: float = _default("initial_pose_x")
     initial_pose_y: float = _default("initial_pose_y")
     initial_pose_a: float = _default("initial_pose_a")
@@ -108,6 +111,9 @@ class LocalisationConfig:
             "initial_cov_xx",
             "initial_cov_yy",
             "initial_cov_aa",
+            "recovery_radius",
+            "confident_max_sd_xy",
+            "confident_max_sd_yaw",
         )
         for name in non_negative:
             if getattr(self, name) < 0.0:

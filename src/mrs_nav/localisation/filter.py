@@ -8,7 +8,13 @@ Each filter update (once the odometry has moved ``update_min_d`` or turned ``upd
    particles as the KLD bound asks for (between ``min_particles`` and ``max_particles``), and replaces a
    fraction ``max(0, 1 - w_fast / w_slow)`` of them with random poses in free space (Augmented MCL, table 8.3):
    ``w_fast`` and ``w_slow`` are fast and slow running averages of how well the scans fit, so a sudden fall
-   (the robot was kidnapped) spreads particles over the map until one of them finds the true pose.
+   (the robot was kidnapped) spreads particles over the map until one of them finds the true pose. Random
+   poses lie in known free space only, and within ``recovery_radius`` of the estimate while it is confident:
+   a passing misfit then searches nearby instead of inviting a look-alike elsewhere (issue 38),
+
+4. takes the estimate from the dominant cluster (heaviest place, then heaviest heading there), never the mean
+   of two, and calls it confident only when that cluster holds 90 % of the weight, is narrow and the scans
+   still fit (:meth:`ParticleFilter.estimate`).
 
 The fit of a scan is the per-beam geometric mean of the weighted average likelihood: it lies in (0, ~z_hit] and
 does not depend on how many beams were used. All steps are numpy over the whole particle set.
@@ -32,7 +38,13 @@ from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.motion_model import OdometryNoise, decompose
 
 _CLUSTER_RADIUS = 0.75  # m: particles this close to the heaviest bin's mean make the pose estimate
-_UNCERTAIN_SHARE = 0.5  # a dominant mode with less of the weight than this leaves the pose unknown
+_CLUSTER_SECTOR = math.pi / 4.0  # rad: headings are grouped in sectors this wide to find the dominant heading
+_CLUSTER_HEADING = math.pi / 3.0  # rad: particles this close to the dominant heading make the pose estimate
+# A dominant cluster with less of the weight than this is not a confident estimate: the office's look-alike
+# corridors keep two or more modes alive for a while after a global spread, and one that holds barely half of
+# the weight is as likely the wrong one (the sharp model then locked global localisation onto it).
+_CONFIDENT_SHARE = 0.9
+_LOST_FIT = 0.5  # the fast average fit below this share of the slow one: the scans no longer fit the belief
 # Odometry 10,000 km from its origin is a broken message (a tf of 1e300): the motion model's squares overflow.
 MAX_ODOM_M = 1e7
 
@@ -64,6 +76,7 @@ class PoseEstimate:
     pose: Pose2D
     covariance: FloatArray
     share: float = 1.0  # weight of the particles in the dominant mode (1: all of them)
+    confident: bool = True  # see ParticleFilter.estimate
 
 
 def sample_motion(
@@ -107,6 +120,7 @@ class ParticleFilter:
         if self._free_cells.size == 0:
             raise InvalidInputError("localisation needs a map with at least one free cell")
         self._fields: dict[float, LikelihoodField] = {}
+        self._given = False  # the cloud is a given pose (set_pose) not yet confirmed or refuted by the scans
         self._last_odom: Pose2D | None = None
         self._updates = 0
         self._w_slow = 0.0
@@ -155,10 +169,12 @@ class ParticleFilter:
             draws = self._rng.standard_normal((n, 3)) * np.sqrt(np.diag(cov))
         particles = draws + np.array([pose.x, pose.y, pose.yaw])
         particles[:, 2] = wrap_angles(particles[:, 2])
+        self._given = True
         self._reset(particles)
 
     def global_localisation(self) -> None:
         """Spread ``max_particles`` uniformly over the map's free space (AMCL's ``global_localization``)."""
+        self._given = False
         self._reset(self._random_poses(self.config.max_particles))
 
     def _reset(self, particles: FloatArray) -> None:
@@ -170,10 +186,25 @@ class ParticleFilter:
         self._force_update = True
         self._w_slow = self._w_fast = 0.0
 
-    def _random_poses(self, count: int) -> FloatArray:
-        """``(count, 3)`` poses uniform over the free cells (x, y) and headings (rad)."""
+    def _recovery_poses(self, count: int) -> FloatArray:
+        """Random poses for recovery: within ``recovery_radius`` of a confident estimate (the robot slipped or
+        the scans were odd for a while: a local search finds it without inviting a distant look-alike), over
+        all the known free space once the estimate is not confident (the robot was kidnapped); never in
+        unknown space, where a scan cannot be checked against the map."""
+        radius, estimate = self.config.recovery_radius, self._estimate
+        if radius <= 0.0 or not estimate.confident:
+            return self._random_poses(count)
+        g = self.grid
+        row, col = np.divmod(self._free_cells, g.width)
+        x = g.origin[0] + (col + 0.5) * g.resolution
+        y = g.origin[1] + (row + 0.5) * g.resolution
+        local = self._free_cells[np.hypot(x - estimate.pose.x, y - estimate.pose.y) <= radius]
+        return self._random_poses(count, local if local.size else self._free_cells)
+
+    def _random_poses(self, count: int, cells: npt.NDArray[np.intp] | None = None) -> FloatArray:
+        """``(count, 3)`` poses uniform over ``cells`` (flat indices; default: every free cell) and headings."""
         g, rng = self.grid, self._rng
-        row, col = np.divmod(rng.choice(self._free_cells, size=count), g.width)
+        row, col = np.divmod(rng.choice(self._free_cells if cells is None else cells, size=count), g.width)
         return np.column_stack(
             [
                 g.origin[0] + (col + rng.random(count)) * g.resolution,
@@ -197,19 +228,13 @@ class ParticleFilter:
         return model
 
     def _sigma(self) -> float:
-        """The hit spread (m) for the next scan: ``laser_sigma_hit`` once the pose is known to a few centimetres,
-        doubled (up to ``laser_sigma_max``) while the dominant mode is wider, and ``laser_sigma_max`` while
-        it holds less than half of the weight (global localisation, recovery). A particle cloud spread over the
+        """The hit spread (m) for the next scan: ``laser_sigma_hit`` while the estimate is confident,
+        ``laser_sigma_max`` while it is not (global localisation, recovery). A particle cloud spread over the
         map rarely has a particle within ``laser_sigma_hit`` of the truth, and a sharp model then scores them
-        all alike; the broad one ranks them by how close they are, and sharpens as they gather."""
-        c = self.config
-        if self._estimate.share < _UNCERTAIN_SHARE:
-            return c.laser_sigma_max
-        spread = math.sqrt(max(0.0, float(self._estimate.covariance[0, 0] + self._estimate.covariance[1, 1])))
-        sigma = c.laser_sigma_hit
-        while sigma < c.laser_sigma_max and sigma < spread:
-            sigma = min(2.0 * sigma, c.laser_sigma_max)
-        return sigma
+        all alike; the broad one ranks them by how close they are. Once one mode is confident (within
+        ``confident_max_sd_xy``, e.g. after a 2D Pose Estimate) the sharp model is used: a broad one there
+        cannot tell places along a corridor apart, and the cloud stayed 0.3 m wide through a spin in place."""
+        return self.config.laser_sigma_hit if self._estimate.confident else self.config.laser_sigma_max
 
     # -- reading ------------------------------------------------------------------------------------------------
 
@@ -227,18 +252,37 @@ class ParticleFilter:
         return max(0.0, 1.0 - self._w_fast / self._w_slow)
 
     def estimate(self) -> PoseEstimate:
-        """The pose estimate after the last update (or reset)."""
+        """The pose estimate after the last update (or reset): the weighted mean and covariance of the dominant
+        cluster, never the mean of two. It is ``confident`` when its standard deviations are within
+        ``confident_max_sd_xy`` (widest axis) and ``confident_max_sd_yaw``, the scans still fit (the fast
+        average fit is at least half of the slow one, i.e. :attr:`recovery_fraction` < 0.5), and either that
+        cluster holds at least 90 % of the weight or the cloud is a pose given by :meth:`set_pose` (a 2D Pose
+        Estimate, the initial pose) that the scans have neither confirmed nor refuted yet: the user's word
+        stands until then, not a global search's first guess."""
         return self._estimate
 
-    def _compute_estimate(self) -> PoseEstimate:
-        """Weighted mean and covariance of the particles near the heaviest 0.5 m cell (the dominant mode)."""
-        w = self.weights
+    def _cluster(self, w: FloatArray) -> npt.NDArray[np.bool_]:
+        """The particles of the dominant mode: near the heaviest 0.5 m cell's mean, and of them those near the
+        heaviest heading sector's mean (a corridor seen both ways makes two modes at one place)."""
         p = self.particles
         _, inverse = np.unique(_bin_keys(p[:, :2], self.config.kld_bin_xy), return_inverse=True)
         heaviest = int(np.argmax(np.bincount(inverse, weights=w)))
         in_cell = inverse == heaviest
         centre = np.average(p[in_cell, :2], axis=0, weights=w[in_cell] + 1e-300)
         near = np.hypot(p[:, 0] - centre[0], p[:, 1] - centre[1]) <= _CLUSTER_RADIUS
+        sectors = np.floor((p[:, 2] + math.pi) / _CLUSTER_SECTOR).astype(np.intp)
+        sector = int(np.argmax(np.bincount(sectors[near], weights=w[near] + 1e-300)))
+        in_sector = near & (sectors == sector)
+        cos, sin = cos_sin(p[in_sector, 2])
+        heading = math.atan2(float(w[in_sector] @ sin), float(w[in_sector] @ cos))
+        cluster: npt.NDArray[np.bool_] = near & (np.abs(wrap_angles(p[:, 2] - heading)) <= _CLUSTER_HEADING)
+        return cluster
+
+    def _compute_estimate(self) -> PoseEstimate:
+        """Weighted mean and covariance of the dominant cluster, and whether it is confident."""
+        w = self.weights
+        p = self.particles
+        near = self._cluster(w)
         share = float(w[near].sum())
         wn = w[near] / share if share > 0.0 else np.full(int(near.sum()), 1.0 / near.sum())
         pn = p[near]
@@ -248,7 +292,17 @@ class ParticleFilter:
         d = pn - mean
         d[:, 2] = wrap_angles(d[:, 2])
         cov = (d * wn[:, None]).T @ d
-        return PoseEstimate(Pose2D(float(mean[0]), float(mean[1]), wrap_angle(mean_yaw)), cov, share)
+        c = self.config
+        narrow = (
+            float(np.linalg.eigvalsh(cov[:2, :2])[-1]) <= c.confident_max_sd_xy**2
+            and float(cov[2, 2]) <= c.confident_max_sd_yaw**2
+        )
+        fits = self.recovery_fraction < 1.0 - _LOST_FIT
+        confirmed = share >= _CONFIDENT_SHARE and narrow and fits
+        # A given pose counts as confident until the scans confirm it (then the rule alone holds) or refute it.
+        confident = confirmed or (self._given and narrow and fits)
+        self._given &= fits and not confirmed
+        return PoseEstimate(Pose2D(float(mean[0]), float(mean[1]), wrap_angle(mean_yaw)), cov, share, confident)
 
     # -- updating -----------------------------------------------------------------------------------------------
 
@@ -305,9 +359,10 @@ class ParticleFilter:
         c, s = (v[:, None] for v in cos_sin(p[:, 2]))
         xs = p[:, 0, None] + c * ex - s * ey
         ys = p[:, 1, None] + s * ex + c * ey
-        log_p = model.log_likelihood(xs, ys, self._sigma()).sum(axis=1)
+        beams, fit_beams = model.log_likelihood(xs, ys, self._sigma(), self.config.laser_sigma_hit)
+        log_p = beams.sum(axis=1)
         prior = self._log_weights - logsumexp(self._log_weights)
-        fit = math.exp(float(logsumexp(prior + log_p)) / ex.size)
+        fit = math.exp(float(logsumexp(prior + fit_beams.sum(axis=1))) / ex.size)
         self._log_weights = prior + self._temper(prior, log_p) * log_p
         cfg = self.config
         if self._w_slow <= 0.0:
@@ -347,7 +402,7 @@ class ParticleFilter:
         drawn = drawn[self._rng.permutation(n_max)]
         if c.recovery_alpha_slow > 0.0 and c.recovery_alpha_fast > 0.0 and self.recovery_fraction > 0.0:
             replace = np.flatnonzero(self._rng.random(n_max) < self.recovery_fraction)
-            drawn[replace] = self._random_poses(replace.size)
+            drawn[replace] = self._recovery_poses(replace.size)
         keys = _bin_keys(drawn, c.kld_bin_xy, c.kld_bin_yaw)
         _, first = np.unique(keys, return_index=True)
         new_bin = np.zeros(n_max)

