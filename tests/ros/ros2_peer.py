@@ -12,15 +12,17 @@ import threading
 import time
 
 import rclpy
-from geometry_msgs.msg import PoseStamped, TransformStamped
+from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid, Odometry
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from sensor_msgs.msg import LaserScan
+from tf2_msgs.msg import TFMessage
 
 RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-LATCHED = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+TF = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 
 
 def summary(msg):
@@ -39,8 +41,8 @@ def summary(msg):
             "resolution": info.resolution,
             "occupied": sum(1 for v in msg.data if v > 50),
         }
-    if isinstance(msg, TransformStamped):
-        return {"frame": msg.header.frame_id, "child": msg.child_frame_id}
+    if isinstance(msg, TFMessage):
+        return {"pairs": sorted([t.header.frame_id, t.child_frame_id] for t in msg.transforms)}
     return {}
 
 
@@ -54,8 +56,8 @@ class Peer(Node):
             ("odom", Odometry, RELIABLE),
             ("scan", LaserScan, qos_profile_sensor_data),
             ("map", OccupancyGrid, LATCHED),
-            ("tf_transforms", TransformStamped, RELIABLE),
-            ("tf_static_transforms", TransformStamped, LATCHED),
+            ("/tf", TFMessage, TF),
+            ("/tf_static", TFMessage, LATCHED),
         ]
         for name, cls, qos in topics:
             self.create_subscription(cls, name, lambda m, n=name: self.heard(n, m), qos)
@@ -64,7 +66,7 @@ class Peer(Node):
     def heard(self, topic, msg):
         now = time.monotonic()
         about = summary(msg)
-        key = (topic, about.get("child"))  # each transform's pair of frames has its own pace
+        key = (topic, str(about.get("pairs")))  # each set of transforms has its own pace
         with self.lock:
             self.counts[topic] = self.counts.get(topic, 0) + 1
             if now - self.printed.get(key, -1.0) < 0.5:
@@ -88,15 +90,22 @@ def main():
     peer = Peer(sys.argv[1] if len(sys.argv) > 1 else "")
     executor = SingleThreadedExecutor()
     executor.add_node(peer)
-    spinner = threading.Thread(target=executor.spin, daemon=True)
+    stop = threading.Event()
+
+    def spin():
+        while not stop.is_set():
+            executor.spin_once(timeout_sec=0.1)
+
+    spinner = threading.Thread(target=spin, daemon=True)
     spinner.start()
     print(json.dumps({"ready": True}), flush=True)
     for line in sys.stdin:
         words = line.split()
         if words[:1] == ["goal"]:
             peer.goal(float(words[1]), float(words[2]))
-    executor.shutdown()  # before the context: a context shut down under a spinning executor aborts
+    stop.set()  # in this order: tearing rclpy down under a spinning executor raises or aborts
     spinner.join()
+    executor.shutdown()
     peer.destroy_node()
     rclpy.try_shutdown()
 

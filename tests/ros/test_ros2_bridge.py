@@ -65,7 +65,7 @@ def bridged(
 
 def test_a_ros2_node_receives_odom_scan_map_and_tf(bridged: dict[str, Any]) -> None:
     peer = bridged["peer"]
-    wanted = ("odom", "scan", "map", "tf_transforms", "tf_static_transforms")
+    wanted = ("odom", "scan", "map", "/tf", "/tf_static")
     wait_for(lambda: all(t in peer.last for t in wanted), 60.0, f"the ROS 2 peer on {wanted} (has {list(peer.last)})")
     odom, scan, grid = peer.last["odom"], peer.last["scan"], peer.last["map"]
     assert (odom["frame"], odom["child"]) == ("odom", "base_footprint")
@@ -78,11 +78,13 @@ def test_a_ros2_node_receives_odom_scan_map_and_tf(bridged: dict[str, Any]) -> N
     wait_for(lambda: peer.last["odom"]["count"] > 50, 30.0, "a stream of odometry")
 
     def frames(topic: str) -> set[tuple[str, str]]:
-        return {(line["frame"], line["child"]) for line in list(peer.lines) if line.get("topic") == topic}
+        lines = [line for line in list(peer.lines) if line.get("topic") == topic]
+        return {(parent, child) for line in lines for parent, child in line["pairs"]}
 
-    # the simulator's odometry, this test's map -> odom, robot_state_publisher's static laser mount
-    wait_for(lambda: {("odom", "base_footprint"), ("map", "odom")} <= frames("tf_transforms"), 30.0, "tf pairs")
-    assert any(child == "base_scan" for _, child in frames("tf_static_transforms")), frames("tf_static_transforms")
+    # tf2_msgs/TFMessage as rviz2 reads it: the simulator's odometry, this test's map -> odom, and the static
+    # laser mount from robot_state_publisher
+    wait_for(lambda: {("odom", "base_footprint"), ("map", "odom")} <= frames("/tf"), 30.0, "tf pairs")
+    assert ("base_link", "base_scan") in frames("/tf_static"), frames("/tf_static")
 
 
 def test_a_goal_is_refused_when_not_allowed(bridged: dict[str, Any]) -> None:

@@ -41,57 +41,47 @@ class Qos(enum.Enum):
     RELIABLE = "reliable"  # reliable, volatile, keep last 10: /odom, /plan, /cmd_vel, goals
     LATCHED = "latched"  # reliable, transient_local, keep last 1: /map, /amcl_pose (late joiners get the last)
     TF = "tf"  # reliable, volatile, keep last 100: /tf
-    TF_STATIC = "tf_static"  # reliable, transient_local, keep last 1 (the ROS 2 half keeps every static frame)
+    TF_STATIC = "tf_static"  # reliable, transient_local, keep last 1: every static transform in one message
 
 
 @dataclass(frozen=True)
 class Route:
-    """One bridged topic: its ROS 1 and ROS 2 names (before the namespace), the ROS 1 type, the ROS 2 type,
-    the QoS, whether it runs ROS 2 -> ROS 1, and whether the robot's namespace applies to its names (not to
-    /tf and /tf_static, which several robots share with their frames prefixed: a namespaced bridge sends on
-    only the transforms whose child frame carries its namespace)."""
+    """One bridged topic: its ROS 1 and ROS 2 names (before the namespace), its type (``pkg/Name``, the same
+    on both sides), the QoS, whether it runs ROS 2 -> ROS 1, and whether the robot's namespace applies to its
+    names (not to /tf and /tf_static, which several robots share with their frames prefixed: a namespaced
+    bridge sends on only the transforms whose child frame carries its namespace)."""
 
     ros1: str
     ros2: str
-    ros1_type: str
-    ros2_type: str
+    type: str
     qos: Qos
     inbound: bool = False
     namespaced: bool = True
 
 
-#: ROS 1 -> ROS 2. tf2_msgs is not among the ROS 2 wheels: every transform of /tf and /tf_static goes out as its
-#: own geometry_msgs/TransformStamped on /tf_transforms and /tf_static_transforms.
+#: ROS 1 -> ROS 2. tf2_msgs/TFMessage is not among the ROS 2 wheels: the install step generates it
+#: (tools/install_ros2.sh).
 OUTBOUND: tuple[Route, ...] = (
-    Route("/scan", "/scan", "sensor_msgs/LaserScan", "sensor_msgs/LaserScan", Qos.SENSOR),
-    Route("/odom", "/odom", "nav_msgs/Odometry", "nav_msgs/Odometry", Qos.RELIABLE),
-    Route("/map", "/map", "nav_msgs/OccupancyGrid", "nav_msgs/OccupancyGrid", Qos.LATCHED),
-    Route("/path", "/plan", "nav_msgs/Path", "nav_msgs/Path", Qos.RELIABLE),
+    Route("/scan", "/scan", "sensor_msgs/LaserScan", Qos.SENSOR),
+    Route("/odom", "/odom", "nav_msgs/Odometry", Qos.RELIABLE),
+    Route("/map", "/map", "nav_msgs/OccupancyGrid", Qos.LATCHED),
+    Route("/path", "/plan", "nav_msgs/Path", Qos.RELIABLE),
     Route(
         "/amcl_pose",
         "/amcl_pose",
-        "geometry_msgs/PoseWithCovarianceStamped",
         "geometry_msgs/PoseWithCovarianceStamped",
         Qos.LATCHED,
     ),
-    Route("/particlecloud", "/particlecloud", "geometry_msgs/PoseArray", "geometry_msgs/PoseArray", Qos.SENSOR),
-    Route("/tf", "/tf_transforms", "tf2_msgs/TFMessage", "geometry_msgs/TransformStamped", Qos.TF, namespaced=False),
-    Route(
-        "/tf_static",
-        "/tf_static_transforms",
-        "tf2_msgs/TFMessage",
-        "geometry_msgs/TransformStamped",
-        Qos.TF_STATIC,
-        namespaced=False,
-    ),
+    Route("/particlecloud", "/particlecloud", "geometry_msgs/PoseArray", Qos.SENSOR),
+    Route("/tf", "/tf", "tf2_msgs/TFMessage", Qos.TF, namespaced=False),
+    Route("/tf_static", "/tf_static", "tf2_msgs/TFMessage", Qos.TF_STATIC, namespaced=False),
 )
 #: ROS 2 -> ROS 1, each only when its ROS 2 name is in the allow-list (``allow_inbound``).
 INBOUND: tuple[Route, ...] = (
-    Route("/cmd_vel", "/cmd_vel", "geometry_msgs/Twist", "geometry_msgs/Twist", Qos.RELIABLE, inbound=True),
+    Route("/cmd_vel", "/cmd_vel", "geometry_msgs/Twist", Qos.RELIABLE, inbound=True),
     Route(
         "/move_base_simple/goal",
         "/goal_pose",
-        "geometry_msgs/PoseStamped",
         "geometry_msgs/PoseStamped",
         Qos.RELIABLE,
         inbound=True,
@@ -99,7 +89,6 @@ INBOUND: tuple[Route, ...] = (
     Route(
         "/initialpose",
         "/initialpose",
-        "geometry_msgs/PoseWithCovarianceStamped",
         "geometry_msgs/PoseWithCovarianceStamped",
         Qos.RELIABLE,
         inbound=True,

@@ -65,12 +65,13 @@ class Ros2BridgeNode:
         assert self.child.stdout is not None
         self._to_child: IO[bytes] = self.child.stdin
         self._lock = threading.Lock()
+        self._closing = False
         self._subscribers: list[Any] = []
         self._publishers: dict[int, tuple[Route, Any, Any]] = {}
         for channel, route in enumerate(config.routes):
             topic = config.ros1_topic(route)
             if route.inbound:
-                msg_class = get_message_class(route.ros1_type)
+                msg_class = get_message_class(route.type)
                 self._publishers[channel] = (route, msg_class, rospy.Publisher(topic, msg_class, queue_size=10))
             else:
                 # tcp_nodelay: without it Nagle's algorithm holds small messages (odometry) for milliseconds.
@@ -94,8 +95,8 @@ class Ros2BridgeNode:
 
     def _on_ros1(self, msg: rospy.AnyMsg, route_of: tuple[int, Route]) -> None:
         channel, route = route_of
-        if msg._connection_header.get("type") != route.ros1_type:
-            self._refuse(route.ros1, f"type {msg._connection_header.get('type')}, expected {route.ros1_type}")
+        if msg._connection_header.get("type") != route.type:
+            self._refuse(route.ros1, f"type {msg._connection_header.get('type')}, expected {route.type}")
             return
         frame = encode_frame(channel, msg._buff)
         try:
@@ -113,7 +114,7 @@ class Ros2BridgeNode:
         except MrsNavError as err:
             rospy.logerr("ros2 bridge: pipe from the ROS 2 half broken: %s", err)
         code = self.child.wait()
-        if not rospy.is_shutdown():
+        if not self._closing:
             rospy.logfatal("ros2 bridge: the ROS 2 half exited (code %s)", code)
             rospy.signal_shutdown("ROS 2 half exited")
 
@@ -124,7 +125,7 @@ class Ros2BridgeNode:
             return
         route, msg_class, publisher = entry
         try:
-            bad = first_non_finite(deserialize_exactly(noetic_store(), route.ros1_type, payload))
+            bad = first_non_finite(deserialize_exactly(noetic_store(), route.type, payload))
             if bad:
                 raise MrsNavError(f"field {bad} is not a finite number")
             msg = msg_class()
@@ -141,6 +142,7 @@ class Ros2BridgeNode:
         )
 
     def close(self) -> None:
+        self._closing = True
         for subscriber in self._subscribers:
             subscriber.unregister()
         with self._lock, contextlib.suppress(OSError):  # a broken pipe: the ROS 2 half has gone already

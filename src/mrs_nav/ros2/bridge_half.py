@@ -33,10 +33,10 @@ QOS: dict[Qos, QoSProfile] = {
     Qos.LATCHED: QoSProfile(
         depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
     ),
+    # as tf2_ros's broadcasters
     Qos.TF: QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE),
-    # deep enough that a late joiner gets every static frame (one message per transform; see OUTBOUND)
     Qos.TF_STATIC: QoSProfile(
-        depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+        depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
     ),
 }
 
@@ -72,9 +72,10 @@ class BridgeHalf:
         self._out_lock = threading.Lock()
         self.routes = config.routes
         self.publishers: dict[int, Any] = {}
+        self._static: dict[str, Any] = {}  # child frame -> its latest static transform
         for channel, route in enumerate(self.routes):
             topic = config.ros2_topic(route)
-            cls = message_class(route.ros2_type)
+            cls = message_class(route.type)
             if route.inbound:
                 node.create_subscription(
                     cls, topic, lambda m, c=channel, r=route: self._to_ros1(c, r, m), QOS[route.qos]
@@ -90,26 +91,47 @@ class BridgeHalf:
             return
         route = self.routes[channel]
         try:
-            msg = self.codec.decode(route.ros1_type, payload)
+            msg = self.codec.decode(route.type, payload)
         except MrsNavError as err:
             self.drops.drop(route.ros2, str(err))
             return
-        if route.ros1_type == route.ros2_type:
-            publisher.publish(msg)
-        else:  # a TFMessage: each of its transforms on its own (see OUTBOUND), the robot's only
-            for transform in msg.transforms:
-                if self.config.own_frame(transform.child_frame_id):
-                    publisher.publish(transform)
+        if route.qos in (Qos.TF, Qos.TF_STATIC):
+            msg = self._transforms(route, msg)
+            if msg is None:
+                return
+        publisher.publish(msg)
+
+    def _transforms(self, route: Route, msg: Any) -> Any:
+        """The robot's own transforms of a TFMessage (see Ros2BridgeConfig.own_frame), None if none is left.
+
+        /tf_static in ROS 1 has a latched publisher per node; on ROS 2 this half is one publisher whose
+        transient_local history keeps one message, so each static message sent is every static transform so far.
+        """
+        mine = [t for t in msg.transforms if self.config.own_frame(t.child_frame_id)]
+        if route.qos is Qos.TF_STATIC:
+            self._static.update((t.child_frame_id, t) for t in mine)
+            mine = list(self._static.values())
+        if not mine:
+            return None
+        msg.transforms = mine
+        return msg
 
     def _to_ros1(self, channel: int, route: Route, msg: Any) -> None:
         try:
-            frame = encode_frame(channel, self.codec.encode(route.ros2_type, msg))
+            frame = encode_frame(channel, self.codec.encode(route.type, msg))
         except MrsNavError as err:
             self.drops.drop(route.ros2, str(err))
             return
         with self._out_lock:
             self._out.write(frame)
             self._out.flush()
+
+
+def spin_until(executor: SingleThreadedExecutor, stop: threading.Event) -> None:
+    """Spin until ``stop`` is set; the caller then shuts down in order (tearing down rclpy under a spinning
+    executor raises in its thread or aborts the process)."""
+    while not stop.is_set():
+        executor.spin_once(timeout_sec=0.1)
 
 
 def main(argv: list[str]) -> int:
@@ -124,7 +146,8 @@ def main(argv: list[str]) -> int:
     half = BridgeHalf(config, node, stdout)
     executor = SingleThreadedExecutor()
     executor.add_node(node)
-    spinner = threading.Thread(target=executor.spin, daemon=True)
+    stop = threading.Event()
+    spinner = threading.Thread(target=spin_until, args=(executor, stop), daemon=True)
     spinner.start()
     log(
         f"domain {config.domain_id}, discovery {config.discovery_range}, namespace {config.namespace or '/'}, "
@@ -137,9 +160,9 @@ def main(argv: list[str]) -> int:
         log(f"pipe from the ROS 1 half broken: {err}")
         return 1
     finally:
-        # in this order: a context shut down under a spinning executor aborts the process
-        executor.shutdown()
+        stop.set()
         spinner.join()
+        executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()
     return 0

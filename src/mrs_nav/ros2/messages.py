@@ -5,15 +5,9 @@ from __future__ import annotations
 import functools
 import importlib
 from collections.abc import Mapping
-from types import SimpleNamespace
 from typing import Any
 
 from mrs_nav.bridge.ros1_codec import Ros1Codec
-
-#: ROS 1 types the ROS 2 wheels lack, described so that their bytes decode (into a SimpleNamespace).
-MISSING: dict[str, Mapping[str, str]] = {
-    "tf2_msgs/TFMessage": {"transforms": "sequence<geometry_msgs/TransformStamped>"},
-}
 
 
 @functools.cache
@@ -25,15 +19,11 @@ def message_class(type_name: str) -> Any:
 
 @functools.cache
 def fields_of(type_name: str) -> Mapping[str, str]:
-    if type_name in MISSING:
-        return MISSING[type_name]
     fields: Mapping[str, str] = message_class(type_name).get_fields_and_field_types()
     return fields
 
 
 def build(type_name: str, values: dict[str, Any]) -> Any:
-    if type_name in MISSING:
-        return SimpleNamespace(**values)
     return message_class(type_name)(**values)
 
 

@@ -189,7 +189,7 @@ def test_nothing_goes_from_ros2_into_ros1_unless_allowed() -> None:
         ("/tb3_0/goal_pose", "/tb3_0/move_base_simple/goal")
     ]
     tf = next(r for r in allowed.routes if r.ros1 == "/tf")
-    assert (allowed.ros1_topic(tf), allowed.ros2_topic(tf)) == ("/tf", "/tf_transforms")  # shared by the robots
+    assert (allowed.ros1_topic(tf), allowed.ros2_topic(tf)) == ("/tf", "/tf")  # shared by the robots
     assert allowed.own_frame("tb3_0/base_footprint")
     assert not allowed.own_frame("tb3_1/base_footprint")
     assert default.own_frame("base_footprint")
