@@ -101,6 +101,7 @@ COMMANDS: dict[str, Entry] = {
     "mrs-nav bench navigation --seeds 20": Parsed(_BENCH),
     "mrs-nav bench bridge --duration 60 --floors 10": Parsed(_BENCH),
     "mrs-nav bench fleet --robots 3 --duration 30": Parsed(_BENCH),
+    "mrs-nav bench ros2 --duration 90": Parsed(_BENCH),
     "mrs-nav carmen2bag ../shared/data/intel-corrected.log.gz intel.bag": Covered(
         "tests/core/cli/test_carmen2bag_replay.py::test_carmen2bag_then_replay", "on an excerpt of the same log"
     ),

@@ -25,6 +25,16 @@ LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability
 TF = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 
 
+_OUT = threading.Lock()
+
+
+def emit(line):
+    """One JSON line on stdout; callbacks and the command loop print from different threads."""
+    with _OUT:
+        sys.stdout.write(json.dumps(line) + "\n")
+        sys.stdout.flush()
+
+
 def summary(msg):
     if isinstance(msg, Odometry):
         p = msg.pose.pose.position
@@ -73,7 +83,7 @@ class Peer(Node):
                 return
             self.printed[key] = now
             line = {"topic": topic, "count": self.counts[topic], **about}
-        print(json.dumps(line), flush=True)
+        emit(line)
 
     def goal(self, x, y):
         msg = PoseStamped()
@@ -82,7 +92,7 @@ class Peer(Node):
         msg.pose.position.x, msg.pose.position.y = x, y
         msg.pose.orientation.w = 1.0
         self.goal_pub.publish(msg)
-        print(json.dumps({"sent": "goal", "subscribers": self.goal_pub.get_subscription_count()}), flush=True)
+        emit({"sent": "goal", "subscribers": self.goal_pub.get_subscription_count()})
 
 
 def main():
@@ -98,7 +108,7 @@ def main():
 
     spinner = threading.Thread(target=spin, daemon=True)
     spinner.start()
-    print(json.dumps({"ready": True}), flush=True)
+    emit({"ready": True})
     for line in sys.stdin:
         words = line.split()
         if words[:1] == ["goal"]:

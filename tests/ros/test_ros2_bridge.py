@@ -99,8 +99,13 @@ def test_a_goal_is_refused_when_not_allowed(bridged: dict[str, Any]) -> None:
         for _ in range(5):
             closed.send("goal 1.5 1.5")
             time.sleep(0.3)
+
+        def sent() -> list[int]:
+            return [line["subscribers"] for line in list(closed.lines) if "sent" in line]
+
+        wait_for(lambda: len(sent()) == 5, 10.0, "the peer's report of its 5 goals")
+        assert sent() == [0] * 5  # nobody on the closed bridge's domain listens to /goal_pose
         assert heard == []
-        assert [line["subscribers"] for line in closed.lines if "sent" in line] == [0] * 5  # nobody listens
         end = truth.last()
         assert math.hypot(end[1] - start[1], end[2] - start[2]) < 0.05
     finally:

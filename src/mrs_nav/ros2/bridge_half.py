@@ -14,15 +14,13 @@ import threading
 import time
 from typing import IO, Any
 
-import rclpy
-from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
-from rclpy.signals import SignalHandlerOptions
 
 from mrs_nav.bridge.ros2_link import Qos, Ros2BridgeConfig, Route, encode_frame, read_frame
 from mrs_nav.errors import MrsNavError
 from mrs_nav.ros2.messages import codec, message_class
+from mrs_nav.ros2.runtime import spinning_node
 
 # Dropped messages are logged at most once per this many seconds per route (with the count).
 DROP_LOG_PERIOD = 5.0
@@ -127,13 +125,6 @@ class BridgeHalf:
             self._out.flush()
 
 
-def spin_until(executor: SingleThreadedExecutor, stop: threading.Event) -> None:
-    """Spin until ``stop`` is set; the caller then shuts down in order (tearing down rclpy under a spinning
-    executor raises in its thread or aborts the process)."""
-    while not stop.is_set():
-        executor.spin_once(timeout_sec=0.1)
-
-
 def main(argv: list[str]) -> int:
     config = Ros2BridgeConfig.from_json(argv[1])
     stdin, stdout = sys.stdin.buffer, sys.stdout.buffer
@@ -141,30 +132,18 @@ def main(argv: list[str]) -> int:
     # Ctrl-C at a terminal or roslaunch's SIGINT to the group reaches this process too: it ends when the ROS 1
     # half closes its stdin instead, so that the last frames are not cut off.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
-    node = Node("ros2_bridge", namespace="/" + config.namespace if config.namespace else "/")
-    half = BridgeHalf(config, node, stdout)
-    executor = SingleThreadedExecutor()
-    executor.add_node(node)
-    stop = threading.Event()
-    spinner = threading.Thread(target=spin_until, args=(executor, stop), daemon=True)
-    spinner.start()
-    log(
-        f"domain {config.domain_id}, discovery {config.discovery_range}, namespace {config.namespace or '/'}, "
-        f"inbound {list(config.allow_inbound) or 'none'}"
-    )
-    try:
-        while (frame := read_frame(stdin)) is not None:
-            half.forward(*frame)
-    except MrsNavError as err:
-        log(f"pipe from the ROS 1 half broken: {err}")
-        return 1
-    finally:
-        stop.set()
-        spinner.join()
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown()
+    with spinning_node("ros2_bridge", config.namespace) as node:
+        half = BridgeHalf(config, node, stdout)
+        log(
+            f"domain {config.domain_id}, discovery {config.discovery_range}, namespace {config.namespace or '/'}, "
+            f"inbound {list(config.allow_inbound) or 'none'}"
+        )
+        try:
+            while (frame := read_frame(stdin)) is not None:
+                half.forward(*frame)
+        except MrsNavError as err:
+            log(f"pipe from the ROS 1 half broken: {err}")
+            return 1
     return 0
 
 
