@@ -112,6 +112,30 @@ def test_a_goal_is_refused_when_not_allowed(bridged: dict[str, Any]) -> None:
         sub.unregister()
 
 
+def test_a_goal_with_nan_is_dropped_and_the_bridge_goes_on(bridged: dict[str, Any]) -> None:
+    rospy, peer = bridged["rospy"], bridged["peer"]
+    from geometry_msgs.msg import PoseStamped
+
+    heard: list[Any] = []
+    sub = rospy.Subscriber("/move_base_simple/goal", PoseStamped, heard.append)
+    try:
+        wait_for(lambda: sub.get_num_connections() > 0, 30.0, "the bridge's publisher of /move_base_simple/goal")
+
+        def delivered() -> bool:  # until DDS has matched the peer with the bridge, goals reach nobody
+            peer.send("goal nan 1.0")
+            time.sleep(0.2)
+            return any(line.get("subscribers", 0) > 0 for line in list(peer.lines) if "sent" in line)
+
+        wait_for(delivered, 30.0, "the bridge subscribed to /goal_pose")
+        for _ in range(3):
+            peer.send("goal nan 1.0")
+        time.sleep(1.0)
+        assert heard == []
+        assert all(proc.poll() is None for proc in bridged["procs"])
+    finally:
+        sub.unregister()
+
+
 def test_a_ros2_goal_pose_drives_the_robot_there(bridged: dict[str, Any]) -> None:
     peer, truth = bridged["peer"], bridged["truth"]
     wait_for(lambda: "odom" in peer.last, 60.0, "the peer on odom")
