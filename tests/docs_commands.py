@@ -52,6 +52,9 @@ _FLEET_MONITOR = (
 )
 _TLS = "tests/ros/test_zenoh_network.py::test_secured_bridge_as_the_robots_router"
 
+_ROS2 = "tests/ros/test_ros2_bridge.py::test_a_ros2_node_receives_odom_scan_map_and_tf"
+_ROS2_GOAL = "tests/ros/test_ros2_bridge.py::test_a_ros2_goal_pose_drives_the_robot_there"
+
 COMMANDS: dict[str, Entry] = {
     # README.md
     "make demo": Manual("installs Debian packages with apt as root; the two commands it then runs are run here"),
@@ -70,6 +73,19 @@ COMMANDS: dict[str, Entry] = {
         "tests/ros/test_rrt_navigation_slam.py::test_the_arena_goal_is_reached_on_the_slam_map_without_contact",
         "headless, at max rate in lockstep; the test publishes the 2D Nav Goal rviz would",
     ),
+    # docs/tutorials/ros2.md, docs/nodes/ros2_bridge.md
+    "MRS_NAV_ROS2=1 make install": Manual("installs Debian packages with apt as root; make test makes the ROS 2 venv"),
+    "roslaunch mrs_nav ros2_bridge.launch": Covered(_ROS2, "on a domain of the test's own"),
+    "roslaunch mrs_nav ros2_bridge.launch domain_id:=7 allow_inbound:=[/goal_pose]": Covered(
+        _ROS2_GOAL, "on a domain of the test's own"
+    ),
+    "roslaunch mrs_nav ros2_bridge.launch domain_id:=7 allow_inbound:=[/goal_pose,/initialpose]": Covered(
+        _ROS2_GOAL, "on a domain of the test's own, with /goal_pose allowed"
+    ),
+    "roslaunch mrs_nav ros2_bridge.launch namespace:=tb3_0 node_name:=ros2_bridge_tb3_0 domain_id:=7": Manual(
+        "multi_robot.launch with a bridge per robot is not run here; the namespace rules are unit-tested in "
+        "tests/core/bridge/test_ros2_link.py"
+    ),
     # docs/ros.md
     "cd ~/catkin_ws && catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 && source devel/setup.bash": Manual(
         "builds in the user's own catkin workspace"
@@ -85,6 +101,7 @@ COMMANDS: dict[str, Entry] = {
     "mrs-nav bench navigation --seeds 20": Parsed(_BENCH),
     "mrs-nav bench bridge --duration 60 --floors 10": Parsed(_BENCH),
     "mrs-nav bench fleet --robots 3 --duration 30": Parsed(_BENCH),
+    "mrs-nav bench ros2 --duration 90": Parsed(_BENCH),
     "mrs-nav carmen2bag ../shared/data/intel-corrected.log.gz intel.bag": Covered(
         "tests/core/cli/test_carmen2bag_replay.py::test_carmen2bag_then_replay", "on an excerpt of the same log"
     ),

@@ -47,6 +47,7 @@ RANKS: dict[str, int] = {
     "bench": 9,
     "cli": 10,
     "ros": 10,
+    "ros2": 10,  # the ROS 2 half of ros2_bridge (rclpy, in its own venv; never imports rospy)
     "__main__": 11,
     "__init__": 11,
 }

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Idempotent set-up for a Debian 12 machine: Debian's ROS 1 and friends from apt, then a venv made from
 # /usr/bin/python3 with --system-site-packages (so it sees rospy, tf2, ode) holding the pinned pip packages.
-# A second run only checks and returns.
+# A second run only checks and returns. MRS_NAV_ROS2=1 also makes the ROS 2 venv (tools/install_ros2.sh).
 set -euo pipefail
 
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -35,6 +35,7 @@ fi
 
 reqs=$here/requirements.txt
 want=$(sha256sum "$reqs" "$here/pyproject.toml" "$here/setup.py" | sha256sum | cut -d' ' -f1)
+if [ "${MRS_NAV_ROS2:-0}" = 1 ]; then bash "$here/tools/install_ros2.sh"; fi
 if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ] && [ -x "$venv/bin/mrs-nav" ]; then
   exit 0
 fi

@@ -38,6 +38,7 @@ NODES = (
     "rrt_navigation",
     "potential_field_navigation",
     "zenoh_bridge",
+    "ros2_bridge",
     "map_server",
     "tf_filter",
 )

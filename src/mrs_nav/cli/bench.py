@@ -24,6 +24,7 @@ BENCHMARKS = {
     "replay": "replay",
     "replay-batch": "replay_batch",
     "bridge": "bridge",
+    "ros2": "ros2",
     "fleet": "fleet",
     "soak": "soak",
     "localisation": "localisation",

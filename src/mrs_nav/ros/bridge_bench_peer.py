@@ -3,7 +3,8 @@ namespace with ``--namespaces tb3_0,tb3_1``) and subscribes to them directly.
 
 Run as ``python -m mrs_nav.ros.bridge_bench_peer --out FILE [--duration S]`` against a running master. It
 waits until the bridge and its own subscribers are connected, publishes a one-second warm-up, then the
-measured load, and writes JSON: per topic the first measured ``header.seq``, the sequence numbers sent and
+measured load, and writes JSON: per topic the first measured ``header.seq``, the sequence numbers sent, their
+stamps (ns, the wall-clock send times) and
 the wall-clock receive time (s) of each one at the direct subscriber.
 """
 
@@ -55,9 +56,12 @@ def main() -> None:
     parser.add_argument("--duration", type=float, default=60.0)
     parser.add_argument("--connections", type=int, default=2, help="subscribers to wait for per topic")
     parser.add_argument("--namespaces", default="", help="comma-separated robot namespaces (default: none)")
+    parser.add_argument("--odom-rate", type=float, default=None, help="Hz of /odom (default: make_messages')")
     args = parser.parse_args(rospy.myargv()[1:])
     rospy.init_node("bridge_bench_peer", disable_signals=True)
     messages = {t: m for ns in args.namespaces.split(",") for t, m in make_messages(ns.strip()).items()}
+    if args.odom_rate:
+        messages = {t: (typ, m, args.odom_rate if t.endswith("/odom") else r) for t, (typ, m, r) in messages.items()}
     received: dict[str, dict[int, float]] = {t: {} for t in messages}
 
     def on_msg(msg: Any, topic: str) -> None:
@@ -76,6 +80,7 @@ def main() -> None:
             raise SystemExit("bridge_bench_peer: subscribers did not connect within 60 s")
         time.sleep(0.05)
     sent: dict[str, list[int]] = {t: [] for t in messages}
+    stamps: dict[str, list[int]] = {t: [] for t in messages}  # ns, of the measured messages
     first: dict[str, int] = {}
     start = time.monotonic() + 0.2
 
@@ -87,11 +92,12 @@ def main() -> None:
             if t - start > WARMUP + args.duration:
                 return
             time.sleep(max(0.0, t - time.monotonic()))
-            msg.header.stamp = rospy.Time.from_sec(time.time())
+            msg.header.stamp = rospy.Time(nsecs=time.time_ns())
             pubs[topic].publish(msg)  # rospy numbers header.seq
             if t - start >= WARMUP:
                 first.setdefault(topic, msg.header.seq)
                 sent[topic].append(msg.header.seq)
+                stamps[topic].append(msg.header.stamp.to_nsec())
             k += 1
 
     threads = [threading.Thread(target=publish, args=(t,)) for t in messages]
@@ -103,7 +109,12 @@ def main() -> None:
     for s in subs:
         s.unregister()
     out = {
-        t: {"first": first.get(t, 0), "sent": sent[t], "direct": {str(k): v for k, v in received[t].items()}}
+        t: {
+            "first": first.get(t, 0),
+            "sent": sent[t],
+            "stamps": stamps[t],
+            "direct": {str(k): v for k, v in received[t].items()},
+        }
         for t in messages
     }
     write_text(args.out, json.dumps(out), "bench peer results")

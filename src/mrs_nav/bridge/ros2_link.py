@@ -1,0 +1,210 @@
+"""What the ROS 2 bridge's two processes agree on: the routes, their QoS, the frames on the pipe, the child's
+environment.
+
+ROS 1 (Debian's rospy) and ROS 2 (the Jazzy wheels) cannot share a process: both provide ``std_msgs``,
+``nav_msgs``, ... under the same names. So the ROS 1 half (:mod:`mrs_nav.ros.ros2_bridge_node`) starts the ROS 2
+half (:mod:`mrs_nav.ros2.bridge_half`) in the ROS 2 venv and the two exchange ROS 1 serialised messages over the
+child's stdin (ROS 1 -> ROS 2) and stdout (ROS 2 -> ROS 1). A pipe rather than a socket or Zenoh: nothing to
+listen on or secure, no port to pick, the child dies with its parent (end of file on stdin), and the ROS 1 half
+forwards the bytes rospy received without decoding them (``rospy.AnyMsg``).
+
+A frame is ``<channel: uint16><length: uint32><payload>``, little-endian; the channel is the route's index in
+:attr:`Ros2BridgeConfig.routes`.
+"""
+
+from __future__ import annotations
+
+import enum
+import json
+import re
+import struct
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import IO, Any
+
+from mrs_nav.config_files import node_defaults
+from mrs_nav.errors import InvalidInputError
+
+FRAME_HEADER = struct.Struct("<HI")
+#: Larger frames are refused: a map of 4000 x 4000 cells is 16 MB.
+MAX_FRAME_BYTES = 64 * 1024 * 1024
+#: The discovery ranges ROS 2 accepts in ROS_AUTOMATIC_DISCOVERY_RANGE (the default, SUBNET, is not offered).
+DISCOVERY_RANGES = ("LOCALHOST", "SUBNET", "SYSTEM_DEFAULT", "OFF")
+_NAMESPACE = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*)?$")
+
+
+class Qos(enum.Enum):
+    """The ROS 2 QoS of a route, as Nav2 uses them."""
+
+    SENSOR = "sensor"  # best effort, keep last 5 (sensor data): /scan, /particlecloud
+    RELIABLE = "reliable"  # reliable, volatile, keep last 10: /odom, /plan, /cmd_vel, goals
+    LATCHED = "latched"  # reliable, transient_local, keep last 1: /map, /amcl_pose (late joiners get the last)
+    TF = "tf"  # reliable, volatile, keep last 100: /tf
+    TF_STATIC = "tf_static"  # reliable, transient_local, keep last 1: every static transform in one message
+
+
+@dataclass(frozen=True)
+class Route:
+    """One bridged topic: its ROS 1 and ROS 2 names (before the namespace), its type (``pkg/Name``, the same
+    on both sides), the QoS, whether it runs ROS 2 -> ROS 1, and whether the robot's namespace applies to its
+    names (not to /tf and /tf_static, which several robots share with their frames prefixed: a namespaced
+    bridge sends on only the transforms whose child frame carries its namespace)."""
+
+    ros1: str
+    ros2: str
+    type: str
+    qos: Qos
+    inbound: bool = False
+    namespaced: bool = True
+
+
+#: ROS 1 -> ROS 2. tf2_msgs/TFMessage is not among the ROS 2 wheels: the install step generates it
+#: (tools/install_ros2.sh).
+OUTBOUND: tuple[Route, ...] = (
+    Route("/scan", "/scan", "sensor_msgs/LaserScan", Qos.SENSOR),
+    Route("/odom", "/odom", "nav_msgs/Odometry", Qos.RELIABLE),
+    Route("/map", "/map", "nav_msgs/OccupancyGrid", Qos.LATCHED),
+    Route("/path", "/plan", "nav_msgs/Path", Qos.RELIABLE),
+    Route(
+        "/amcl_pose",
+        "/amcl_pose",
+        "geometry_msgs/PoseWithCovarianceStamped",
+        Qos.LATCHED,
+    ),
+    Route("/particlecloud", "/particlecloud", "geometry_msgs/PoseArray", Qos.SENSOR),
+    Route("/tf", "/tf", "tf2_msgs/TFMessage", Qos.TF, namespaced=False),
+    Route("/tf_static", "/tf_static", "tf2_msgs/TFMessage", Qos.TF_STATIC, namespaced=False),
+)
+#: ROS 2 -> ROS 1, each only when its ROS 2 name is in the allow-list (``allow_inbound``).
+INBOUND: tuple[Route, ...] = (
+    Route("/cmd_vel", "/cmd_vel", "geometry_msgs/Twist", Qos.RELIABLE, inbound=True),
+    Route(
+        "/move_base_simple/goal",
+        "/goal_pose",
+        "geometry_msgs/PoseStamped",
+        Qos.RELIABLE,
+        inbound=True,
+    ),
+    Route(
+        "/initialpose",
+        "/initialpose",
+        "geometry_msgs/PoseWithCovarianceStamped",
+        Qos.RELIABLE,
+        inbound=True,
+    ),
+)
+
+
+def _namespaced(namespace: str, topic: str) -> str:
+    return f"/{namespace}{topic}" if namespace else topic
+
+
+@dataclass(frozen=True)
+class Ros2BridgeConfig:
+    """The bridge's parameters (defaults: config/ros2_bridge.yaml)."""
+
+    namespace: str
+    domain_id: int
+    discovery_range: str
+    allow_inbound: tuple[str, ...]
+    python: str
+
+    @classmethod
+    def from_mapping(cls, params: Mapping[str, Any]) -> Ros2BridgeConfig:
+        merged = {**node_defaults("ros2_bridge"), **params}
+        known = {r.ros2 for r in INBOUND}
+        allow = tuple(str(t) for t in merged["allow_inbound"] or ())
+        unknown = sorted(set(allow) - known)
+        if unknown:
+            raise InvalidInputError(f"allow_inbound: {unknown} not among the inbound topics {sorted(known)}")
+        domain = int(merged["domain_id"])
+        if not 0 <= domain <= 232:
+            raise InvalidInputError(f"domain_id: {domain} is outside 0..232")
+        discovery = str(merged["discovery_range"]).upper()
+        if discovery not in DISCOVERY_RANGES:
+            raise InvalidInputError(f"discovery_range: {discovery!r} is not one of {', '.join(DISCOVERY_RANGES)}")
+        namespace = str(merged["namespace"]).strip("/")
+        if not _NAMESPACE.match(namespace):
+            raise InvalidInputError(f"namespace: {namespace!r} is not a valid ROS namespace")
+        return cls(namespace, domain, discovery, allow, str(merged["python"]))
+
+    @property
+    def routes(self) -> tuple[Route, ...]:
+        """Every outbound route, then the allowed inbound ones; a frame's channel is an index in this."""
+        return OUTBOUND + tuple(r for r in INBOUND if r.ros2 in self.allow_inbound)
+
+    def ros1_topic(self, route: Route) -> str:
+        return _namespaced(self.namespace, route.ros1) if route.namespaced else route.ros1
+
+    def ros2_topic(self, route: Route) -> str:
+        return _namespaced(self.namespace, route.ros2) if route.namespaced else route.ros2
+
+    def own_frame(self, frame: str) -> bool:
+        """Whether a transform to ``frame`` belongs to this bridge's robot (every frame without a namespace)."""
+        return not self.namespace or frame.lstrip("/").startswith(self.namespace + "/")
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self))
+
+    @classmethod
+    def from_json(cls, text: str) -> Ros2BridgeConfig:
+        fields = json.loads(text)
+        return cls(**{**fields, "allow_inbound": tuple(fields["allow_inbound"])})
+
+
+def ros2_python(configured: str, environ: Mapping[str, str], main_prefix: str) -> Path:
+    """The ROS 2 venv's interpreter: ``configured`` if given, else ``$VENV_ROS2/bin/python``, else the
+    ``.venv-ros2`` beside the running venv (where ``MRS_NAV_ROS2=1 make install`` puts it)."""
+    if configured:
+        return Path(configured)
+    if environ.get("VENV_ROS2"):
+        return Path(environ["VENV_ROS2"]) / "bin" / "python"
+    return Path(main_prefix).parent / ".venv-ros2" / "bin" / "python"
+
+
+def child_environment(config: Ros2BridgeConfig, environ: Mapping[str, str], package_root: Path) -> dict[str, str]:
+    """The ROS 2 half's environment: this process's, without what would mix ROS 1 into it, plus its domain.
+
+    PYTHONPATH is only the folder holding mrs_nav (not Debian's ROS 1 packages), and the wheels' bootstrap
+    marker is dropped so that the child's bootstrap sets LD_LIBRARY_PATH for itself again."""
+    env = {k: v for k, v in environ.items() if k not in ("PYTHONPATH", "_ROS_WHEELS_BOOTSTRAP_COMPLETE")}
+    env.pop("ROS_LOCALHOST_ONLY", None)  # deprecated; would override the range given here
+    env["PYTHONPATH"] = str(package_root)
+    env["ROS_DOMAIN_ID"] = str(config.domain_id)
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = config.discovery_range
+    env["RMW_IMPLEMENTATION"] = "rmw_fastrtps_cpp"
+    env["PYTHONUNBUFFERED"] = "1"
+    return env
+
+
+def child_command(python: Path, config: Ros2BridgeConfig) -> list[str]:
+    return [str(python), "-m", "mrs_nav.ros2.bridge_half", config.to_json()]
+
+
+def encode_frame(channel: int, payload: bytes | memoryview) -> bytes:
+    if len(payload) > MAX_FRAME_BYTES:
+        raise InvalidInputError(f"frame of {len(payload)} bytes exceeds {MAX_FRAME_BYTES}")
+    return FRAME_HEADER.pack(channel, len(payload)) + bytes(payload)
+
+
+def read_frame(stream: IO[bytes]) -> tuple[int, bytes] | None:
+    """The next ``(channel, payload)`` from ``stream``; None at its end. InvalidInputError on a frame too large
+    or cut short (the stream is then out of step and unusable)."""
+    header = stream.read(FRAME_HEADER.size)
+    if not header:
+        return None
+    if len(header) < FRAME_HEADER.size:
+        raise InvalidInputError("pipe closed inside a frame header")
+    channel, length = FRAME_HEADER.unpack(header)
+    if length > MAX_FRAME_BYTES:
+        raise InvalidInputError(f"frame of {length} bytes exceeds {MAX_FRAME_BYTES}")
+    payload = stream.read(length)
+    if len(payload) < length:
+        raise InvalidInputError(f"pipe closed inside a frame ({len(payload)} of {length} bytes)")
+    return channel, payload
+
+
+def package_root() -> Path:
+    """The folder holding the mrs_nav package (what the ROS 2 half's PYTHONPATH needs)."""
+    return Path(__file__).resolve().parents[2]

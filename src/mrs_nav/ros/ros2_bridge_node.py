@@ -1,0 +1,153 @@
+"""Ros2BridgeNode: the ROS 1 half of ros2_bridge; it starts the ROS 2 half and feeds it ROS 1 bytes.
+
+Each outbound route's ROS 1 topic is subscribed with ``rospy.AnyMsg`` and its serialised bytes go unchanged down
+the child's stdin (:mod:`mrs_nav.bridge.ros2_link`); the ROS 2 half decodes and publishes them. Inbound frames
+(only the allow-listed ROS 2 topics) come back on the child's stdout, are checked (exactly one message of the
+route's type, every number finite) and published on the ROS 1 topic. When the ROS 2 half exits, the node ends
+with an error: roslaunch then reports it (``required`` in the launch file).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import subprocess
+import sys
+import threading
+from typing import IO, Any
+
+import rospy
+from roslib.message import get_message_class
+
+from mrs_nav.bridge.decoder import deserialize_exactly, first_non_finite, noetic_store
+from mrs_nav.bridge.ros2_link import (
+    Ros2BridgeConfig,
+    Route,
+    child_command,
+    child_environment,
+    encode_frame,
+    package_root,
+    read_frame,
+    ros2_python,
+)
+from mrs_nav.errors import MrsNavError
+from mrs_nav.ros.params import private_params
+
+NODE = "ros2_bridge"
+# Refusals and drops are logged at most once per this many seconds per topic (with the count).
+DROP_LOG_PERIOD = 5.0
+
+
+def load_config() -> Ros2BridgeConfig:
+    params = private_params(NODE)
+    if not params["namespace"]:
+        params["namespace"] = rospy.get_namespace().strip("/")
+    return Ros2BridgeConfig.from_mapping(params)
+
+
+class Ros2BridgeNode:
+    """Starts the ROS 2 half and wires the routes to it; :meth:`wait` blocks until either half ends."""
+
+    def __init__(self, config: Ros2BridgeConfig) -> None:
+        self.config = config
+        self.forwarded = 0
+        self.refused: dict[str, int] = {}
+        python = ros2_python(config.python, os.environ, sys.prefix)
+        if not python.exists():
+            raise MrsNavError(f"no ROS 2 venv at {python.parent.parent}: make it with `MRS_NAV_ROS2=1 make install`")
+        self.child = subprocess.Popen(
+            child_command(python, config),
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            env=child_environment(config, os.environ, package_root()),
+        )
+        assert self.child.stdin is not None
+        assert self.child.stdout is not None
+        self._to_child: IO[bytes] = self.child.stdin
+        self._lock = threading.Lock()
+        self._closing = False
+        self._subscribers: list[Any] = []
+        self._publishers: dict[int, tuple[Route, Any, Any]] = {}
+        for channel, route in enumerate(config.routes):
+            topic = config.ros1_topic(route)
+            if route.inbound:
+                msg_class = get_message_class(route.type)
+                self._publishers[channel] = (route, msg_class, rospy.Publisher(topic, msg_class, queue_size=10))
+            else:
+                # tcp_nodelay: without it Nagle's algorithm holds small messages (odometry) for milliseconds.
+                self._subscribers.append(
+                    rospy.Subscriber(
+                        topic,
+                        rospy.AnyMsg,
+                        self._on_ros1,
+                        callback_args=(channel, route),
+                        queue_size=100,
+                        tcp_nodelay=True,
+                    )
+                )
+        self._reader = threading.Thread(target=self._read_child, args=(self.child.stdout,), daemon=True)
+        self._reader.start()
+        rospy.on_shutdown(self.close)
+        rospy.loginfo(
+            "ros2 bridge: ROS 2 half pid %d (%s), domain %d, discovery %s, inbound %s",
+            self.child.pid, python, config.domain_id, config.discovery_range, list(config.allow_inbound) or "none",
+        )  # fmt: skip
+
+    def _on_ros1(self, msg: rospy.AnyMsg, route_of: tuple[int, Route]) -> None:
+        channel, route = route_of
+        if msg._connection_header.get("type") != route.type:
+            self._refuse(route.ros1, f"type {msg._connection_header.get('type')}, expected {route.type}")
+            return
+        frame = encode_frame(channel, msg._buff)
+        try:
+            with self._lock:
+                self._to_child.write(frame)
+                self._to_child.flush()
+            self.forwarded += 1
+        except (BrokenPipeError, ValueError):  # the ROS 2 half is gone; _read_child ends the node
+            pass
+
+    def _read_child(self, stream: IO[bytes]) -> None:
+        try:
+            while (frame := read_frame(stream)) is not None:
+                self._publish_inbound(*frame)
+        except MrsNavError as err:
+            rospy.logerr("ros2 bridge: pipe from the ROS 2 half broken: %s", err)
+        code = self.child.wait()
+        if not self._closing:
+            rospy.logfatal("ros2 bridge: the ROS 2 half exited (code %s)", code)
+            rospy.signal_shutdown("ROS 2 half exited")
+
+    def _publish_inbound(self, channel: int, payload: bytes) -> None:
+        entry = self._publishers.get(channel)
+        if entry is None:
+            self._refuse(f"channel {channel}", "not an allowed inbound channel")
+            return
+        route, msg_class, publisher = entry
+        try:
+            bad = first_non_finite(deserialize_exactly(noetic_store(), route.type, payload))
+            if bad:
+                raise MrsNavError(f"field {bad} is not a finite number")
+            msg = msg_class()
+            msg.deserialize(payload)
+        except Exception as err:  # anything from the other side may be broken: never let it stop the node
+            self._refuse(route.ros2, str(err))
+            return
+        publisher.publish(msg)
+
+    def _refuse(self, topic: str, reason: str) -> None:
+        self.refused[topic] = self.refused.get(topic, 0) + 1
+        rospy.logwarn_throttle(
+            DROP_LOG_PERIOD, f"ros2 bridge: dropped on {topic} ({self.refused[topic]} so far): {reason}"
+        )
+
+    def close(self) -> None:
+        self._closing = True
+        for subscriber in self._subscribers:
+            subscriber.unregister()
+        with self._lock, contextlib.suppress(OSError):  # a broken pipe: the ROS 2 half has gone already
+            self._to_child.close()  # the ROS 2 half ends at the end of its input
+        try:
+            self.child.wait(timeout=5.0)
+        except subprocess.TimeoutExpired:
+            self.child.kill()

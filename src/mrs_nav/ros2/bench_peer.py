@@ -1,0 +1,112 @@
+"""The ROS 2 side of ``mrs-nav bench ros2``: a subscriber that records receive times, and the floor's publisher.
+
+``python -m mrs_nav.ros2.bench_peer sub --out FILE --ready FILE`` subscribes to /odom (reliable), /scan (sensor
+data) and /map (transient local), as ros2_bridge publishes them, and at the end of its stdin writes JSON: per
+topic ``[[stamp_ns, receive_time_s], ...]`` (stamps are the publishers' wall-clock send times, unique per
+message). ``python -m mrs_nav.ros2.bench_peer pub --duration S --warmup S`` publishes the same messages at the
+same rates from rclpy (the floor) and writes the measured stamps, per topic, to ``--out``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import array
+import json
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from typing import Any
+
+from nav_msgs.msg import OccupancyGrid, Odometry
+from rclpy.node import Node
+from sensor_msgs.msg import LaserScan
+
+from mrs_nav.bridge.ros2_link import OUTBOUND
+from mrs_nav.ros2.bridge_half import QOS
+from mrs_nav.ros2.runtime import spinning_node
+
+#: topic -> rate (Hz) of the bench's load
+RATES = {"/odom": 50.0, "/scan": 5.0, "/map": 1.0}
+_TYPES = {"/odom": Odometry, "/scan": LaserScan, "/map": OccupancyGrid}
+_QOS = {r.ros2: QOS[r.qos] for r in OUTBOUND if r.ros2 in RATES}
+
+
+def messages() -> dict[str, Any]:
+    """The messages of mrs_nav.ros.bridge_bench_peer's sizes: a 360-beam scan, a 384 x 384 map."""
+    scan = LaserScan(ranges=array.array("f", [1.0] * 360), intensities=array.array("f", [0.0] * 360))
+    scan.header.frame_id = "base_scan"
+    grid = OccupancyGrid(data=array.array("b", [-1] * (384 * 384)))
+    grid.header.frame_id = "map"
+    grid.info.width = grid.info.height = 384
+    odom = Odometry()
+    odom.header.frame_id, odom.child_frame_id = "odom", "base_footprint"
+    return {"/odom": odom, "/scan": scan, "/map": grid}
+
+
+def subscribe(node: Node, out: Path, ready: Path, wait_publishers: bool) -> None:
+    received: dict[str, list[tuple[int, float]]] = {t: [] for t in RATES}
+
+    def on_msg(msg: Any, topic: str) -> None:
+        now = time.time()
+        received[topic].append((msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec, now))
+
+    for topic in RATES:
+        node.create_subscription(_TYPES[topic], topic, lambda m, t=topic: on_msg(m, t), _QOS[topic])
+    if wait_publishers:  # ready once the (bridge's) publishers are discovered: measured messages do not wait for it
+        deadline = time.monotonic() + 60.0
+        while any(node.count_publishers(t) < 1 for t in RATES) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        time.sleep(1.0)  # discovery seen here is the first half of matching; the publisher's side follows
+    ready.write_text("ready")
+    sys.stdin.read()  # until the bench closes it
+    out.write_text(json.dumps(received))
+
+
+def publish(node: Node, out: Path, duration: float, warmup: float, subscribers: int) -> None:
+    publishers = {t: node.create_publisher(_TYPES[t], t, _QOS[t]) for t in RATES}
+    deadline = time.monotonic() + 60.0
+    while any(p.get_subscription_count() < subscribers for p in publishers.values()):
+        if time.monotonic() > deadline:
+            raise SystemExit("bench_peer: the floor's subscriber did not match within 60 s")
+        time.sleep(0.05)
+    msgs = messages()
+    sent: dict[str, list[int]] = {t: [] for t in RATES}
+    start = time.monotonic() + 0.2
+
+    def run(topic: str) -> None:
+        msg, rate, k = msgs[topic], RATES[topic], 0
+        while (at := start + k / rate) - start <= warmup + duration:
+            time.sleep(max(0.0, at - time.monotonic()))
+            now = time.time_ns()
+            msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(now, 1_000_000_000)
+            publishers[topic].publish(msg)
+            if at - start >= warmup:
+                sent[topic].append(now)
+            k += 1
+
+    with ThreadPoolExecutor(len(RATES)) as pool:  # a thread per topic, each at its own rate
+        list(pool.map(run, RATES))
+    out.write_text(json.dumps(sent))
+
+
+def main(argv: list[str]) -> int:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("mode", choices=["sub", "pub"])
+    parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument("--ready", type=Path, default=None)
+    parser.add_argument("--duration", type=float, default=60.0)
+    parser.add_argument("--warmup", type=float, default=1.0)
+    parser.add_argument("--subscribers", type=int, default=1)
+    parser.add_argument("--wait-publishers", action="store_true", help="sub: ready once every topic has one")
+    args = parser.parse_args(argv[1:])
+    with spinning_node(f"bench_{args.mode}") as node:
+        if args.mode == "sub":
+            subscribe(node, args.out, args.ready or args.out.with_suffix(".ready"), args.wait_publishers)
+        else:
+            publish(node, args.out, args.duration, args.warmup, args.subscribers)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
