@@ -106,7 +106,7 @@ COMMANDS: dict[str, Entry] = {
         "tests/core/cli/test_carmen2bag_replay.py::test_carmen2bag_then_replay", "on an excerpt of the same log"
     ),
     "mrs-nav replay intel.bag --slam --out intel_out --relations ../shared/data/intel.relations --json": Covered(
-        "tests/core/slam/test_relations.py::test_replay_scores_relations_on_a_converted_log"
+        "tests/core/slam/eval/test_relations.py::test_replay_scores_relations_on_a_converted_log"
     ),
     "mrs-nav carmen2bag --help": Run(),
     'mrs-nav demo --world office --goals "2,-2;-7.5,3.5" --out demo_out/office': Covered(

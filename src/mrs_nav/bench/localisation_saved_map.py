@@ -22,7 +22,7 @@ from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.maps.world import World
 from mrs_nav.sim.scripted_drive import OFFICE_CORRIDOR_LOOP
 from mrs_nav.sim.simulator import SimulatorConfig
-from mrs_nav.slam.sim_drive import OFFICE_LOOP_WAYPOINTS, OFFICE_START, drive_with_slam
+from mrs_nav.slam.eval.sim_drive import OFFICE_LOOP_WAYPOINTS, OFFICE_START, drive_with_slam
 from mrs_nav.stack.demo import slam_grid
 
 #: Where the robot is put down: on the ring corridor, away from the mapping start (-5, -5, 0).
