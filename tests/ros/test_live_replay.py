@@ -19,7 +19,7 @@ from mrs_nav.replay.recorded import grid_from_message
 from mrs_nav.replay.session_replay import replayed_map
 from mrs_nav.replay.slam_replay import replay_slam
 from mrs_nav.slam.config import SlamConfig
-from tests.rosharness import RosMaster, stop, wait_for
+from tests.rosharness import RosMaster, robot_state_publisher, stop, wait_for
 
 pytestmark = pytest.mark.ros
 
@@ -74,7 +74,9 @@ def test_rosbag_play_into_the_slam_node_agrees_with_offline_replay(
 
     sub = rospy.Subscriber("/map", GridMsg, on_map, queue_size=5)
     try:
-        with ros_master.launch("slam.launch", "sim:=false", "rviz:=false") as launch:
+        # sim:=false: a robot already runs; this bag has no /tf_static, so its description comes from the
+        # robot's robot_state_publisher, as on a real robot
+        with robot_state_publisher(ros_master), ros_master.launch("slam.launch", "sim:=false", "rviz:=false") as launch:
             wait_for(
                 lambda: launch.poll() is not None or _subscribed(ros_master, "/scan", "/slam"),
                 60.0,
