@@ -206,6 +206,10 @@ COMMANDS: dict[str, Entry] = {
         _SAVED_MAP, "rviz is left out where there is no display"
     ),
     "rosrun mrs_nav map_saver -f ~/office": Covered(_SAVED_MAP),
+    "rosrun mrs_nav teleop_keyboard": Covered(
+        "tests/ros/test_teleop_keyboard.py::test_keys_drive_cmd_vel_and_quitting_stops_the_robot_and_restores_the_terminal",
+        "typed into a tmux terminal",
+    ),
     "roslaunch mrs_nav navigation.launch map_file:=$HOME/office.yaml "
     "world:=$(rospack find mrs_nav)/worlds/office.world x:=-5 y:=-5": Covered(_SAVED_MAP, "at max rate in lockstep"),
     "rosservice call /global_localization": Covered(

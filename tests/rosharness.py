@@ -246,3 +246,14 @@ class RosMaster:
                 raise
         # Keep the launch log next to the test's output: pytest shows it with -rA.
         print(where)
+
+
+@contextlib.contextmanager
+def robot_state_publisher(master: RosMaster) -> Iterator[subprocess.Popen[bytes]]:
+    """The Burger's description and robot_state_publisher (/tf_static base_footprint -> base_scan), as a robot's
+    bringup provides them: slam.launch and navigation.launch with sim:=false start none, a robot already runs."""
+    urdf = (REPO / "urdf" / "burger.urdf").read_text(encoding="utf-8")
+    _call(master.uri, "setParam", "/robot_description", urdf)
+    log = master.log_dir / f"robot_state_publisher-{time.monotonic_ns()}.log"
+    with process(["rosrun", "robot_state_publisher", "robot_state_publisher"], master.env, log) as proc:
+        yield proc

@@ -29,6 +29,7 @@ RANKS: dict[str, int] = {
     "tables": 2,
     "ros_processes": 2,
     "config_files": 2,  # every node parameter's default (config/*.yaml)
+    "ignored_params": 1,  # gmapping/amcl/move_base parameters the nodes ignore (data)
     # the algorithms, each on the layers below it
     "maps": 3,
     "control": 4,

@@ -263,3 +263,13 @@ def test_launch_files_set_only_parameters_the_node_has(launch: Path) -> None:
         for loaded in node.iter("rosparam"):
             if loaded.get("file"):
                 assert loaded.get("file") == f"$(find mrs_nav)/config/{name}.yaml", launch.name
+
+
+def test_ignored_foreign_parameters_are_for_real_nodes_and_never_ones_they_read() -> None:
+    """A gmapping/amcl/move_base name the node starts to read must leave the ignored table (the warning would lie)."""
+    from mrs_nav.ignored_params import IGNORED
+
+    assert set(IGNORED) <= set(NODES)
+    for node, names in IGNORED.items():
+        assert not set(names) & set(node_defaults(node)), node
+        assert all(reason and not reason.endswith(".") for reason in names.values()), node

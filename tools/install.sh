@@ -15,7 +15,7 @@ apt_packages=(
   python3-visualization-msgs python3-tf2-msgs ros-robot-state-publisher
   python3-actionlib python3-actionlib-msgs python3-move-base-msgs
   python3-pyode python3-numpy python3-scipy python3-yaml python3-venv python3-pip
-  xvfb xdotool imagemagick
+  xvfb xdotool imagemagick tmux  # tmux: the keyboard teleop tested in a real terminal
   openssl  # certificates for the Zenoh bridge's TLS tests and bench
   libsdformat-dev pkg-config
 )

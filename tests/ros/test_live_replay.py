@@ -21,7 +21,7 @@ from mrs_nav.replay.recorded import grid_from_message
 from mrs_nav.replay.session_replay import replayed_map
 from mrs_nav.replay.slam_replay import replay_slam
 from mrs_nav.slam.config import SlamConfig
-from tests.rosharness import RosMaster, stop, wait_for
+from tests.rosharness import RosMaster, robot_state_publisher, stop, wait_for
 
 pytestmark = pytest.mark.ros
 
@@ -93,8 +93,11 @@ def test_rosbag_play_into_the_slam_node_agrees_with_offline_replay(
 
 @contextmanager
 def live_slam(master: RosMaster) -> Iterator[None]:
-    """``slam.launch sim:=false`` (no simulator, no rviz) for the ``with`` block, once its SLAM node takes scans."""
-    with master.launch("slam.launch", "sim:=false", "rviz:=false") as launch:
+    """``slam.launch sim:=false`` (no simulator, no rviz) for the ``with`` block, once its SLAM node takes scans.
+
+    sim:=false means a robot already runs: the bags played into it have no /tf_static, so the robot's description
+    comes from its own robot_state_publisher, as on a real robot."""
+    with robot_state_publisher(master), master.launch("slam.launch", "sim:=false", "rviz:=false") as launch:
         wait_for(
             lambda: launch.poll() is not None or _subscribed(master, "/scan", "/slam"),
             60.0,

@@ -23,7 +23,7 @@ from mrs_nav.maps.rasterize import rasterize_world
 from mrs_nav.maps.world import World, load_world
 from mrs_nav.sim import Simulator, SimulatorConfig
 from tests.ros.test_localisation_node import initial_pose_msg
-from tests.rosharness import REPO, RosMaster, wait_for
+from tests.rosharness import REPO, RosMaster, robot_state_publisher, wait_for
 
 pytestmark = pytest.mark.ros
 
@@ -115,7 +115,8 @@ def node(ros_master: RosMaster, rospy_node: Any, tmp_path_factory: pytest.TempPa
     poses = rospy.Publisher("/initialpose", PoseWithCovarianceStamped, queue_size=1)
     args = ["sim:=false", "rviz:=false", "navigation:=false", f"map_file:={map_file}", "x:=-5.0", "y:=-5.0"]
     try:
-        with ros_master.launch("navigation.launch", *args) as proc:
+        # sim:=false: the robot (this test's clock and odometry, and its robot_state_publisher) already runs
+        with robot_state_publisher(ros_master), ros_master.launch("navigation.launch", *args) as proc:
             rospy.wait_for_service("/global_localization", 60.0)
             up = robot.now  # the node's tf listener has the odometry from here on
             wait_for(lambda: robot.now > up + 1.0, 30.0, "a second of the clock")

@@ -14,6 +14,8 @@ from typing import Any
 import numpy as np
 import pytest
 
+from mrs_nav.maps.map_world import saved_world
+from mrs_nav.resources import WORLDS_DIR
 from tests.ros.driveharness import Drive
 from tests.ros.navharness import FOOTPRINT_RADIUS, StatusLog, TruthTrack
 from tests.rosharness import RosMaster, wait_for
@@ -93,6 +95,8 @@ def test_slam_then_saved_map_then_goals_in_other_rooms(ros_master: RosMaster, ro
             )
             assert result.returncode == 0, result.stderr
         assert truth.contacts == 0
+        # the map names the world it was made in: navigation.launch without world:= simulates that one
+        assert saved_world(saved.with_suffix(".yaml")) == WORLDS_DIR / "office.world"
     finally:
         truth.close()
 

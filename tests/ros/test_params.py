@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import math
 import subprocess
+from pathlib import Path
 
 import pytest
 
 from mrs_nav.errors import InvalidInputError
-from mrs_nav.ros.params import _convert
-from tests.rosharness import RosMaster
+from mrs_nav.ros.params import _convert, unknown_params_message
+from mrs_nav.ros_processes import process
+from tests.rosharness import RosMaster, wait_for
 
 
 def test_numbers_come_as_the_defaults_type() -> None:
@@ -130,3 +132,27 @@ def test_a_filter_parameter_written_with_an_exponent_is_read_as_a_number(ros_mas
     assert done.returncode == 1
     assert len(fatal) == 1
     assert "odom_alpha1: must lie in [0, 10], got 1e+03" in fatal[0]
+
+
+def test_names_the_file_lacks_are_unknown_or_ignored_with_the_reason() -> None:
+    assert unknown_params_message("slam", ["delta", "maxUrange"]) is None
+    assert unknown_params_message("slam", ["bogus", "particles", "delta", "typo"]) == (
+        "slam: unknown parameters ~bogus, ~typo (not in slam.yaml); ignored. "
+        "~particles: mrs_nav SLAM has no particle filter; ignored"
+    )
+    assert unknown_params_message("tf_filter", ["particles"]) == (
+        "tf_filter: unknown parameter ~particles (not in tf_filter.yaml); ignored"
+    )
+
+
+def test_rosrun_slam_with_gmapping_tuning_warns_once_naming_each(ros_master: RosMaster, tmp_path: Path) -> None:
+    """``_particles`` and ``_minimumScore`` did nothing without a word, and so did a typo."""
+    log = tmp_path / "slam.log"
+    args = ["rosrun", "mrs_nav", "slam", "__name:=slam_params", "_particles:=30", "_minimumScore:=50", "_bogus:=1"]
+    with process(args, ros_master.env, log):
+        wait_for(lambda: "slam: resolution" in log.read_text(), 60.0, "slam started")
+    warnings = [line for line in log.read_text().splitlines() if "WARN" in line and "ignored" in line]
+    assert len(warnings) == 1, log.read_text()
+    assert "unknown parameter ~bogus (not in slam.yaml); ignored" in warnings[0]
+    assert "~minimumScore: mrs_nav SLAM matches scans by a correlative search plus ICP" in warnings[0]
+    assert "~particles: mrs_nav SLAM has no particle filter; ignored" in warnings[0]

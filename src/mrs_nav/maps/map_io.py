@@ -206,13 +206,20 @@ def map_targets(path: Path, what: str = "") -> tuple[Path, Path]:
 
 
 def save_map(
-    grid: OccupancyGrid, path: str | Path, *, occupied_min: int = OCCUPIED_MIN, free_max: int = FREE_MAX
+    grid: OccupancyGrid,
+    path: str | Path,
+    *,
+    occupied_min: int = OCCUPIED_MIN,
+    free_max: int = FREE_MAX,
+    world: str | None = None,
 ) -> Path:
     """Write ``grid`` as map_server files: ``path`` (``.yaml``) and the ``.pgm`` beside it; returns the yaml path.
 
     Cells at or above ``occupied_min`` (65) are written occupied, ``0..free_max`` (19) free, the rest unknown
     (map_saver's convention; its ``--occ`` and ``--free``). A grid whose resolution or origin a map file cannot
-    hold is refused before anything is written; a failure leaves both targets as they were.
+    hold is refused before anything is written; a failure leaves both targets as they were. ``world`` (the
+    simulated world the map was made in) is kept as ``mrs_nav_world``, a key map_server ignores
+    (:mod:`mrs_nav.maps.map_world`).
     """
     path, image_path = map_targets(Path(path))
     if not 0 <= free_max < occupied_min <= OCCUPIED:
@@ -228,6 +235,8 @@ def save_map(
         f"origin: [{', '.join(_yaml_float(v) for v in grid.origin)}]\n"
         "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\nmode: trinary\n"
     )
+    if world:
+        meta += f"mrs_nav_world: {_yaml_string(world)}\n"
     try:
         # The yaml is entered first so that it is renamed last: it never names an image not yet in place.
         with contextlib.ExitStack() as stack:

@@ -21,6 +21,7 @@ from nav_msgs.srv import GetMap, GetMapRequest, GetMapResponse
 
 from mrs_nav.errors import InvalidInputError, MrsNavError
 from mrs_nav.maps.map_io import load_map, map_targets, save_map
+from mrs_nav.maps.map_world import disagreement, world_path
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.options import Parser, integer_option
 from mrs_nav.ros.map_messages import occupancy_grid_msg
@@ -28,6 +29,8 @@ from mrs_nav.ros.navigation_conversions import grid_from_msg
 from mrs_nav.ros.params import private_params
 
 NODE = "map_server"  # its private parameters: config/map_server.yaml
+# The simulator's world file (its ~world as simulation.launch names it), when one runs.
+SIMULATOR_WORLD = "simulator/world"
 
 
 class MapServerNode:
@@ -50,7 +53,17 @@ class MapServerNode:
         parser = Parser(prog="map_server", description="Serve a map_server map (.yaml + .pgm).")
         parser.add_argument("map", type=Path, help="the map's .yaml description")
         args = parser.parse_args(argv)
-        return cls(load_map(args.map), private_params(NODE)["frame_id"])
+        node = cls(load_map(args.map), private_params(NODE)["frame_id"])
+        warn_if_other_world(args.map)
+        return node
+
+
+def warn_if_other_world(map_yaml: Path) -> None:
+    """Warn once when the simulator runs another world than the one ``map_yaml`` was saved in."""
+    world = rospy.get_param(SIMULATOR_WORLD, "")
+    note = disagreement(map_yaml, world) if isinstance(world, str) and world else None
+    if note is not None:
+        rospy.logwarn(f"map_server: {note}")
 
 
 @dataclass(frozen=True)
@@ -115,4 +128,7 @@ class MapSaverNode:
         except InvalidInputError as err:
             raise InvalidInputError(f"{self._sub.resolved_name}: {err}") from err
         o = self.options
-        return save_map(grid, o.yaml_path, occupied_min=o.occupied_min, free_max=o.free_max)
+        # the world a simulator runs, kept in the map for navigation.launch (mrs_nav.maps.map_world)
+        world = rospy.get_param(SIMULATOR_WORLD, "")
+        where = str(world_path(world).absolute()) if isinstance(world, str) and world else None
+        return save_map(grid, o.yaml_path, occupied_min=o.occupied_min, free_max=o.free_max, world=where)

@@ -7,17 +7,23 @@ so ``rosrun`` (nothing loaded into ``~``) and ``roslaunch`` (the file loaded) st
 str), or the default when the parameter is not set. A value of the wrong kind (``rate: "fast"``, a float for an
 int, anything but a bool for a bool) raises :class:`InvalidInputError` naming the parameter, so a node stops at
 start-up with one line instead of carrying a bad value. Ranges are checked by the core configs themselves.
+
+``private_params`` also warns once about the names under the node's ``~`` that its file lacks
+(:func:`warn_unknown_params`): a typo, or a gmapping/amcl/move_base parameter this stand-in ignores
+(:mod:`mrs_nav.ignored_params`, named with the reason), would otherwise do nothing without a word.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from typing import Any, TypeVar
 
 import rospy
 
-from mrs_nav.config_files import node_defaults
+from mrs_nav.config_files import defaults_path, node_defaults
 from mrs_nav.errors import InvalidInputError
+from mrs_nav.ignored_params import IGNORED
 
 T = TypeVar("T", bool, int, float, str)
 
@@ -55,6 +61,7 @@ def private_param(name: str, default: T) -> T:
 def private_params(node: str) -> dict[str, Any]:
     """Every parameter of ``node`` (``config/<node>.yaml``): ``~name`` as the type of its default there (lists
     and mappings as given), the default where unset."""
+    warn_unknown_params(node)
     values: dict[str, Any] = {}
     for name, default in node_defaults(node).items():
         if isinstance(default, bool | int | float | str):
@@ -63,3 +70,32 @@ def private_params(node: str) -> dict[str, Any]:
         else:
             values[name] = rospy.get_param(f"~{name}", default)
     return values
+
+
+def unknown_params_message(node: str, given: Iterable[str]) -> str | None:
+    """One line naming each of ``given`` (names under the node's ``~``) that ``config/<node>.yaml`` lacks: those
+    ignored on purpose with the reason, the others as unknown; ``None`` when every name is known."""
+    known = node_defaults(node)
+    ignored = IGNORED.get(node, {})
+    strange = sorted({name for name in given if name not in known})
+    if not strange:
+        return None
+    parts = [f"~{name}: {ignored[name]}; ignored" for name in strange if name in ignored]
+    unknown = [f"~{name}" for name in strange if name not in ignored]
+    if unknown:
+        parts.insert(
+            0,
+            f"unknown parameter{'s' * (len(unknown) > 1)} {', '.join(unknown)} (not in "
+            f"{defaults_path(node).name}); ignored",
+        )
+    return f"{node}: " + ". ".join(parts)
+
+
+def warn_unknown_params(node: str) -> None:
+    """Warn once (one log line) about the calling node's private parameters that ``node``'s file lacks."""
+    prefix = rospy.get_name().rstrip("/") + "/"
+    # A mapping parameter (``~DWAPlannerROS/max_vel_x``) counts by its first name under the node's namespace.
+    given = {name[len(prefix) :].split("/")[0] for name in rospy.get_param_names() if name.startswith(prefix)}
+    message = unknown_params_message(node, given)
+    if message is not None:
+        rospy.logwarn(message)

@@ -57,6 +57,7 @@ from visualization_msgs.msg import Marker
 from mrs_nav.config_files import node_default
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
+from mrs_nav.maps.map_world import world_of_map
 from mrs_nav.maps.world import Box, load_world
 from mrs_nav.ros.conversions import (
     clock_msg,
@@ -199,7 +200,10 @@ def _own_the_clock() -> Any:
 
 
 def resolve_world(name: str) -> Path:
-    """A world file path; a bare name (``office`` or ``office.world``) means one of this package's worlds."""
+    """A world file path; a bare name (``office`` or ``office.world``) means one of this package's worlds, and a
+    saved map's YAML the world it was made in (``navigation.launch map_file:=`` without ``world:=``)."""
+    if name.endswith(".yaml"):
+        return world_of_map(Path(name).expanduser())
     if "/" in name:
         return Path(name)
     filename = name if name.endswith(".world") else f"{name}.world"
