@@ -15,8 +15,6 @@ _NO_PARTICLES = "mrs_nav SLAM has no particle filter"
 _MATCHER = "mrs_nav SLAM matches scans by a correlative search plus ICP (search_linear, search_angular)"
 _LIKELIHOOD = "mrs_nav SLAM scores scans on a likelihood field (sigma)"
 _LOCAL_PLANNER = "rrt_navigation follows its plan with its own controller (speed, epsilon, gain)"
-_RECOVERY = "rrt_navigation has no recovery behaviours; it replans (max_failed_plans, retry_delay)"
-
 #: ``{node: {parameter: reason it is ignored}}`` for the stand-ins of gmapping, amcl and move_base.
 IGNORED: Mapping[str, Mapping[str, str]] = MappingProxyType(
     {
@@ -53,7 +51,6 @@ IGNORED: Mapping[str, Mapping[str, str]] = MappingProxyType(
                 "beam_skip_threshold": "the localisation does not skip beams by agreement",
                 "beam_skip_error_threshold": "the localisation does not skip beams by agreement",
                 "gui_publish_rate": "the particle cloud is published after every update",
-                "save_pose_rate": "the localisation does not store its pose in the parameter server",
                 "first_map_only": "the localisation takes every map it receives",
                 "selective_resampling": "resampling follows resample_interval and the effective sample size",
                 "tf_broadcast": "the localisation always publishes map->odom",
@@ -63,10 +60,6 @@ IGNORED: Mapping[str, Mapping[str, str]] = MappingProxyType(
             {
                 "base_global_planner": "the global planner is chosen with planner (rrt_star|rrt)",
                 "base_local_planner": _LOCAL_PLANNER,
-                "recovery_behaviors": _RECOVERY,
-                "recovery_behavior_enabled": _RECOVERY,
-                "clearing_rotation_allowed": _RECOVERY,
-                "conservative_reset_dist": _RECOVERY,
                 "controller_patience": "a stalled robot is caught by progress_timeout",
                 "planner_patience": "a failing planner is caught by max_failed_plans",
                 "max_planning_retries": "a failing planner is caught by max_failed_plans",
