@@ -20,6 +20,7 @@ from typing import Any
 
 from tqdm import tqdm
 
+from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.options import runs_option
 from mrs_nav.resources import WORLDS_DIR
@@ -90,9 +91,11 @@ def _row(name: str, results: list[dict[str, Any]]) -> list[object]:
 
 def run(args: argparse.Namespace) -> str:
     names = [name.strip() for name in args.followers.split(",") if name.strip()]
-    unknown = sorted(set(names) - set(FOLLOWERS))
+    unknown = [name for name in names if name not in FOLLOWERS]
     if unknown or not names:
-        raise SystemExit(f"ERROR: --followers: unknown {', '.join(unknown) or '(none given)'}")
+        raise InvalidInputError(
+            f"--followers: unknown {unknown or args.followers!r}; expected some of {', '.join(FOLLOWERS)}"
+        )
     rows = []
     for name in names:
         results = [run_once(FOLLOWERS[name], seed) for seed in tqdm(range(args.runs), desc=name, leave=False)]
