@@ -6,7 +6,7 @@ diagonal runs past the cylinder: ``potential_field_navigation.launch`` (the pote
 world's obstacles) and ``rrt_navigation.launch`` (SLAM and the RRT* path follower). The goal goes out through
 :mod:`mrs_nav.ros.navigation_bench_peer`, which counts the simulator's ground-truth contacts and the smallest
 clearance of the true footprint. Reported per follower: runs, goals reached, runs with a contact, the contacts
-in all, the smallest clearance and the seeds that touched. Seeds run 0, 1, ... for each follower.
+in all, the smallest clearance and the seeds that touched. Seeds run from ``--first-seed`` (0) for each follower.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from tqdm import tqdm
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
-from mrs_nav.options import runs_option
+from mrs_nav.options import optional_runs_option, runs_option
 from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.ros_processes import process, roscore, roslaunch_command, run_peer
 from mrs_nav.tables import markdown_table
@@ -48,6 +48,9 @@ FOLLOWERS = {
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--runs", type=runs_option, default=200, help="seeded runs per follower (default 200)")
+    parser.add_argument(
+        "--first-seed", type=optional_runs_option, default=0, help="seed of the first run (default 0; to split a bench)"
+    )
     parser.add_argument("--followers", default=",".join(FOLLOWERS), help="comma-separated: " + ", ".join(FOLLOWERS))
 
 
@@ -73,8 +76,8 @@ def run_once(follower: Follower, seed: int) -> dict[str, Any]:
                 )
 
 
-def _row(name: str, results: list[dict[str, Any]]) -> list[object]:
-    touched = [seed for seed, r in enumerate(results) if r["contacts"] > 0]
+def _row(name: str, results: list[dict[str, Any]], first_seed: int = 0) -> list[object]:
+    touched = [seed for seed, r in enumerate(results, first_seed) if r["contacts"] > 0]
     clearances = [r["min_clearance_m"] for r in results if r["min_clearance_m"] is not None]
     return [
         name,
@@ -98,8 +101,9 @@ def run(args: argparse.Namespace) -> str:
         )
     rows = []
     for name in names:
-        results = [run_once(FOLLOWERS[name], seed) for seed in tqdm(range(args.runs), desc=name, leave=False)]
-        rows.append(_row(name, results))
+        seeds = range(args.first_seed, args.first_seed + args.runs)
+        results = [run_once(FOLLOWERS[name], seed) for seed in tqdm(seeds, desc=name, leave=False)]
+        rows.append(_row(name, results, args.first_seed))
     header = [
         "follower",
         "runs",
@@ -113,7 +117,8 @@ def run(args: argparse.Namespace) -> str:
     ]
     return (
         f"Each follower's whole ROS stack in lockstep at max rate (own roscore, `{FOLLOWERS['potential-field'].launch}`"
-        f" / `{FOLLOWERS['rrt'].launch} rviz:=false`, `real_time_factor:=0 lockstep:=true seed:=N`, seeds 0..), "
+        f" / `{FOLLOWERS['rrt'].launch} rviz:=false`, `real_time_factor:=0 lockstep:=true seed:=N`, "
+        f"seeds {args.first_seed}..{args.first_seed + args.runs - 1}), "
         f"arena `{WORLD}` from ({START.x}, {START.y}) to {GOAL}: ground-truth contacts "
         "(`/ground_truth/contacts`) and the true footprint's (Burger radius 0.105 m) smallest clearance to the "
         "world over the run. Target: 0 contacts.\n\n" + markdown_table(header, rows)

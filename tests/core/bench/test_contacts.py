@@ -13,7 +13,7 @@ from mrs_nav.errors import InvalidInputError
 
 def test_an_unknown_follower_is_refused_before_any_run() -> None:
     with pytest.raises(InvalidInputError, match="--followers: unknown \\['dwa'\\]"):
-        run(argparse.Namespace(runs=1, followers="rrt,dwa"))
+        run(argparse.Namespace(runs=1, first_seed=0, followers="rrt,dwa"))
 
 
 def test_a_touch_names_its_seed_and_counts_every_contact() -> None:
@@ -30,3 +30,4 @@ def test_a_touch_names_its_seed_and_counts_every_contact() -> None:
     assert row[:5] == ["potential-field", 3, 2, 1, 2]  # runs, reached within 0.2 m, runs touching, contacts
     assert math.isclose(row[5], -0.01)  # the smallest clearance of all runs
     assert row[-1] == "1"  # the seed that touched
+    assert _row("rrt", [result(1, 0.0)], first_seed=40)[-1] == "40"
