@@ -9,6 +9,7 @@ When run from a source checkout, the checkout is put first on ROS_PACKAGE_PATH a
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import re
 import signal
@@ -174,3 +175,18 @@ def read_clock(env: dict[str, str], timeout: float = 20.0) -> tuple[float, float
     if not match:
         raise RosProcessError(f"could not read /clock: {out.stderr.strip()[-300:]}")
     return int(match.group(1)) + int(match.group(2)) * 1e-9, wall
+
+
+def run_peer(proc: subprocess.Popen[bytes], env: dict[str, str], log_dir: Path, peer_args: list[str]) -> Any:
+    """Once the launch ``proc`` (logging to ``log_dir/launch.log``) has its clock running, run
+    :mod:`mrs_nav.ros.navigation_bench_peer` with ``peer_args`` against it; the peer's JSON result."""
+    out = log_dir / "result.json"
+    read_clock(env, timeout=60.0)  # the launch is up and /use_sim_time set before the peer starts
+    peer = [sys.executable, "-m", "mrs_nav.ros.navigation_bench_peer", "--out", str(out), *peer_args]
+    done = subprocess.run(peer, env=env, capture_output=True, text=True, timeout=900, check=False)
+    if done.returncode != 0 or not out.is_file():
+        log = (log_dir / "launch.log").read_text()[-500:]
+        raise RosProcessError(f"navigation bench peer failed: {done.stderr.strip()[-300:]} {log}")
+    if proc.poll() is not None:
+        raise RosProcessError(f"roslaunch exited early: {(log_dir / 'launch.log').read_text()[-500:]}")
+    return json.loads(out.read_text())

@@ -20,11 +20,18 @@ import time
 from pathlib import Path
 from typing import Any
 
-from mrs_nav.bench.navigation import run_peer
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.resources import WORLDS_DIR
-from mrs_nav.ros_processes import TAG_VARIABLE, RosProcessError, process, read_clock, roscore, tagged_pids
+from mrs_nav.ros_processes import (
+    TAG_VARIABLE,
+    RosProcessError,
+    process,
+    read_clock,
+    roscore,
+    run_peer,
+    tagged_pids,
+)
 from mrs_nav.tables import markdown_table
 
 TARGET_RTF = 3.0  # 3 robots, whole stack, max rate in lockstep on a 2-core machine (issue 17)

@@ -16,10 +16,8 @@ the outcome and the real-time factor achieved from the goal to its outcome.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import statistics
-import subprocess
 import sys
 import tempfile
 from dataclasses import dataclass
@@ -43,7 +41,7 @@ from mrs_nav.options import budget_option, optional_runs_option, runs_option
 from mrs_nav.planning import path_length
 from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.robot import BURGER_RADIUS
-from mrs_nav.ros_processes import RosProcessError, process, read_clock, roscore, roslaunch_command
+from mrs_nav.ros_processes import process, roscore, roslaunch_command, run_peer
 from mrs_nav.sim import Simulator, SimulatorConfig
 from mrs_nav.stack.demo import Demo, DemoConfig
 from mrs_nav.tables import markdown_table
@@ -93,21 +91,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=3,
         help="seeds of the office corridor box (0 = none)",
     )
-
-
-def run_peer(proc: subprocess.Popen[bytes], env: dict[str, str], log_dir: Path, peer_args: list[str]) -> Any:
-    """Once the launch ``proc`` (logging to ``log_dir/launch.log``) has its clock running, run
-    :mod:`mrs_nav.ros.navigation_bench_peer` with ``peer_args`` against it; the peer's JSON result."""
-    out = log_dir / "result.json"
-    read_clock(env, timeout=60.0)  # the launch is up and /use_sim_time set before the peer starts
-    peer = [sys.executable, "-m", "mrs_nav.ros.navigation_bench_peer", "--out", str(out), *peer_args]
-    done = subprocess.run(peer, env=env, capture_output=True, text=True, timeout=900, check=False)
-    if done.returncode != 0 or not out.is_file():
-        log = (log_dir / "launch.log").read_text()[-500:]
-        raise RosProcessError(f"navigation bench peer failed: {done.stderr.strip()[-300:]} {log}")
-    if proc.poll() is not None:
-        raise RosProcessError(f"roslaunch exited early: {(log_dir / 'launch.log').read_text()[-500:]}")
-    return json.loads(out.read_text())
 
 
 def ros_run(scenario: Scenario, seed: int) -> dict[str, float]:

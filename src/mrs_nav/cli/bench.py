@@ -29,6 +29,7 @@ BENCHMARKS = {
     "soak": "soak",
     "localisation": "localisation",
     "multi-robot": "multi_robot",
+    "contacts": "contacts",
 }
 
 

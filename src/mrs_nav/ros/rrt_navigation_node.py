@@ -263,7 +263,8 @@ class RrtNavigationNode:
         self._query_rng = np.random.default_rng(None if config.seed is None else config.seed + 1)
         self._lock = threading.Lock()
         self._tf_buffer = tf2_ros.Buffer()
-        self._tf_listener = tf2_ros.TransformListener(self._tf_buffer)
+        # the pose (tf) without Nagle's delay, as cmd_vel: see potential_field_navigation_node
+        self._tf_listener = tf2_ros.TransformListener(self._tf_buffer, tcp_nodelay=True)
         self._cmd_pub = rospy.Publisher("cmd_vel", Twist, queue_size=1, tcp_nodelay=True)
         self._path_pub = rospy.Publisher("path", Path, queue_size=1, latch=True)
         self._costmap_pub = rospy.Publisher(
