@@ -56,7 +56,7 @@ def _node_values(node: str) -> dict[str, Any]:
 
 def _builders() -> dict[str, Any]:
     from mrs_nav.ros.potential_field_navigation_node import PotentialFieldNavigationConfig
-    from mrs_nav.ros.rrt_navigation_node import RrtNavigationConfig
+    from mrs_nav.ros.rrt_navigation_config import RrtNavigationConfig
     from mrs_nav.ros.simulator_node import SimulatorNodeConfig
     from mrs_nav.ros.tf_filter_node import TfFilterConfig
 
@@ -143,7 +143,9 @@ def test_the_map_server_reads_its_yaml_keys() -> None:
     assert _subscripted_keys(ROS_DIR / "map_server_node.py") == set(node_defaults("map_server"))
 
 
-@pytest.mark.parametrize("path", sorted(ROS_DIR.glob("*_node.py")), ids=lambda p: p.stem)
+@pytest.mark.parametrize(
+    "path", sorted([*ROS_DIR.glob("*_node.py"), *ROS_DIR.glob("*_config.py")]), ids=lambda p: p.stem
+)
 def test_nodes_read_parameters_only_through_their_yaml(path: Path) -> None:
     """No literal default left in a node: every ``~`` parameter comes from private_params(NODE), and every key
     a node reads by name is in its YAML."""

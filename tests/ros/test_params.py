@@ -45,7 +45,7 @@ def test_rrt_navigation_max_iterations_caps_a_plan_and_a_cap_below_one_is_refuse
     from mrs_nav.geometry import Pose2D
     from mrs_nav.maps.occupancy_grid import OccupancyGrid
     from mrs_nav.navigation.plan_worker import rrt_planner
-    from mrs_nav.ros.rrt_navigation_node import RrtNavigationConfig
+    from mrs_nav.ros.rrt_navigation_config import RrtNavigationConfig
 
     config = RrtNavigationConfig(time_budget_s=5.0, max_iterations=40)
     plan = rrt_planner(config.planner, config.time_budget_s, config.max_iterations)
