@@ -9,4 +9,6 @@ from pathlib import Path
 CHECKOUT = Path(__file__).resolve().parents[2]
 WORLDS_DIR = CHECKOUT / "worlds"
 MAPS_DIR = CHECKOUT / "maps"
-CONFIG_DIR = CHECKOUT / "config"
+# An installed wheel (`mrs-nav monitor` alone) has no checkout around it: it carries the configs as mrs_nav/config
+# (in the checkout a link to config/), so the bridge's defaults come from the same file either way.
+CONFIG_DIR = CHECKOUT / "config" if (CHECKOUT / "config").is_dir() else Path(__file__).resolve().parent / "config"
