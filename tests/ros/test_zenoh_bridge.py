@@ -256,13 +256,14 @@ def test_a_goal_stamped_an_hour_ago_or_in_the_future_is_dropped_and_counted(rout
             for s in (hour_ago, ahead)
         ]
         wait_for(lambda: status(session)["inbound"][GOAL]["dropped"] == dropped_before + 4, 10, "4 goals counted")
-        sent_at = rospy_node.get_rostime()
+        sent_stamps: list[int] = []
 
         def fresh_goal_taken() -> bool:
             # Goals are limited to 2 Hz and a loaded machine may deliver the last test's late: a fresh goal that
             # the limit drops is sent again, never a stale one.
             if not goals:
-                pub.put(serialize_goal(0.75, 0.5, 0.0))  # stamped now: taken
+                sent_stamps.append(time.time_ns() - 2 * 10**9)  # 2 s old: within max_age, so taken
+                pub.put(serialize_goal(0.75, 0.5, 0.0, stamp_ns=sent_stamps[-1]))
                 time.sleep(0.6)
             return bool(goals)
 
@@ -272,7 +273,8 @@ def test_a_goal_stamped_an_hour_ago_or_in_the_future_is_dropped_and_counted(rout
         session.close()
         sub.unregister()
     assert {(g.pose.position.x, g.pose.position.y) for g in goals} == {(0.75, 0.5)}
-    assert goals[0].header.stamp >= sent_at  # restamped with the robot's ROS time
+    # restamped with the robot's ROS time (sim time, or the bridge's wall clock): never the sender's stamp
+    assert goals[0].header.stamp.to_nsec() not in sent_stamps
     errors = [r.err.payload.to_string() for replies in answers for r in replies if r.err is not None]
     assert len(errors) == 2
     assert "stamped 3600" in errors[0]
