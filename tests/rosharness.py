@@ -72,6 +72,43 @@ def _call(uri: str, method: str, *args: Any, timeout: float = 5.0) -> Any:
     return value
 
 
+def forget_dead_nodes(master_uri: str) -> list[str]:
+    """Unregister every node whose XML-RPC server no longer answers (``rosnode cleanup``, without asking); return
+    their names.
+
+    The session's master outlives each launch, and a node killed before it could unregister stays listed with its
+    old port. When a later launch starts a node of the same name, the master sends ``shutdown`` to that old port,
+    which by then may belong to another new node: a CI run lost its simulator that way ("[/map_server] Reason: new
+    node registered with same name" in the simulator's log), and the launch died with it."""
+    publications, subscriptions, services = _call(master_uri, "getSystemState")
+    nodes = {node for _, names in [*publications, *subscriptions, *services] for node in names}
+    dead: list[str] = []
+    for node in sorted(nodes):
+        try:
+            _call(_call(master_uri, "lookupNode", node), "getPid", timeout=2.0)
+        except ConnectionRefusedError:
+            dead.append(node)
+        except (OSError, xmlrpc.client.Error):
+            continue  # slow or half-started: not provably dead, leave it
+    master = xmlrpc.client.ServerProxy(master_uri, transport=_TimeoutTransport(5.0))
+    for node in dead:
+        try:
+            api = _call(master_uri, "lookupNode", node)
+        except OSError:
+            continue
+        for topic, names in publications:
+            if node in names:
+                master.unregisterPublisher(node, topic, api)
+        for topic, names in subscriptions:
+            if node in names:
+                master.unregisterSubscriber(node, topic, api)
+        for service, names in services:
+            if node in names:
+                with contextlib.suppress(OSError):
+                    master.unregisterService(node, service, _call(master_uri, "lookupService", service))
+    return dead
+
+
 def unconnected(master_uri: str) -> dict[str, list[tuple[str, str]]]:
     """Per publishing node, each ``(topic, subscriber)`` the master lists whose connection the publisher does not
     have; a node that does not answer maps to ``[("not answering", reason)]``.
@@ -233,17 +270,21 @@ class RosMaster:
         # them (roslaunch numbers them per launch), and a failure is read from them after the whole run.
         nodes = log.with_suffix("")
         where = f"roslaunch log: {log}; its nodes' logs: {nodes}"
-        with process(
-            ["roslaunch", "--wait", "mrs_nav", launch_file, *args], {**self.env, "ROS_LOG_DIR": str(nodes)}, log
-        ) as proc:
-            try:
-                yield proc
-            except AssertionError as err:
-                if str(err).startswith("timed out"):
-                    for note in [*stall_report(self.uri), *last_warnings(nodes)]:
-                        err.add_note(note)
-                err.add_note(where)
-                raise
+        forget_dead_nodes(self.uri)  # a node an earlier test killed must not take one of this launch's down
+        try:
+            with process(
+                ["roslaunch", "--wait", "mrs_nav", launch_file, *args], {**self.env, "ROS_LOG_DIR": str(nodes)}, log
+            ) as proc:
+                try:
+                    yield proc
+                except AssertionError as err:
+                    if str(err).startswith("timed out"):
+                        for note in [*stall_report(self.uri), *last_warnings(nodes)]:
+                            err.add_note(note)
+                    err.add_note(where)
+                    raise
+        finally:
+            forget_dead_nodes(self.uri)  # what roslaunch had to SIGKILL is still registered
         # Keep the launch log next to the test's output: pytest shows it with -rA.
         print(where)
 
@@ -255,5 +296,8 @@ def robot_state_publisher(master: RosMaster) -> Iterator[subprocess.Popen[bytes]
     urdf = (REPO / "urdf" / "burger.urdf").read_text(encoding="utf-8")
     _call(master.uri, "setParam", "/robot_description", urdf)
     log = master.log_dir / f"robot_state_publisher-{time.monotonic_ns()}.log"
-    with process(["rosrun", "robot_state_publisher", "robot_state_publisher"], master.env, log) as proc:
-        yield proc
+    try:
+        with process(["rosrun", "robot_state_publisher", "robot_state_publisher"], master.env, log) as proc:
+            yield proc
+    finally:
+        forget_dead_nodes(master.uri)
