@@ -4,8 +4,10 @@ node not yet up."""
 
 from __future__ import annotations
 
+import os
 import select
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -14,7 +16,7 @@ from typing import IO, Any
 
 import pytest
 
-from tests.rosharness import REPO, RosMaster, free_port, ros_env, stop, wait_for
+from tests.rosharness import REPO, RosMaster, ros_env, stop, wait_for
 
 pytestmark = pytest.mark.ros
 
@@ -40,15 +42,19 @@ def test_ctrl_c_leaves_no_traceback(ros_master: RosMaster, rospy_node: Any) -> N
 
 
 def _read_until(stream: IO[bytes], marker: str, timeout: float) -> str:
-    """The lines ``stream`` gives until one holding ``marker`` (failing after ``timeout`` wall seconds)."""
-    seen = ""
+    """What ``stream`` gives until it holds ``marker`` (failing after ``timeout`` wall seconds).
+
+    Read from the file descriptor, not with the buffered ``readline``: that can take the marker's line into its
+    buffer together with the line before, and select then waits for output that never comes (the node prints
+    "Unable to register" once). CI runs failed that way when the message followed the last import at once."""
+    seen = b""
     deadline = time.monotonic() + timeout
-    while marker not in seen:
-        ready, _, _ = select.select([stream], [], [], max(0.0, deadline - time.monotonic()))
-        line = stream.readline().decode() if ready else ""
-        assert line, f"no line holding {marker!r} within {timeout:.0f} s:\n{seen}"
-        seen += line
-    return seen
+    while marker.encode() not in seen:
+        ready, _, _ = select.select([stream.fileno()], [], [], max(0.0, deadline - time.monotonic()))
+        chunk = os.read(stream.fileno(), 65536) if ready else b""
+        assert chunk, f"no line holding {marker!r} within {timeout:.0f} s:\n{seen.decode(errors='replace')[-3000:]}"
+        seen += chunk
+    return seen.decode(errors="replace")
 
 
 @pytest.mark.parametrize(
@@ -62,9 +68,13 @@ def _read_until(stream: IO[bytes], marker: str, timeout: float) -> str:
 def test_ctrl_c_while_a_node_starts_leaves_no_traceback(tmp_path: Path, moment: str) -> None:
     # Python's handler raised KeyboardInterrupt wherever the node was, a traceback in the launch log (seen with
     # rrt_navigation still inside init_node, walking the package path on a loaded machine)
+    # The master's port is held bound but never listening: connections are refused, and no other process can
+    # take it (a port merely free when picked was taken by another run's node once, and no "Unable to register" came)
+    reserved = socket.socket()
+    reserved.bind(("127.0.0.1", 0))
     node = subprocess.Popen(
         [sys.executable, "-X", "importtime", str(REPO / "scripts" / "rrt_navigation")],
-        env=ros_env(f"http://127.0.0.1:{free_port()}", tmp_path),
+        env=ros_env(f"http://127.0.0.1:{reserved.getsockname()[1]}", tmp_path),
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         start_new_session=True,
@@ -76,6 +86,7 @@ def test_ctrl_c_while_a_node_starts_leaves_no_traceback(tmp_path: Path, moment: 
         rest, _ = node.communicate(timeout=20.0)
     finally:
         stop(node)
+        reserved.close()
     said = before + rest.decode()
     assert node.returncode == -signal.SIGINT, said[-3000:]
     assert "Traceback" not in said, said[-3000:]

@@ -48,8 +48,9 @@ def test_a_recorded_session_is_mapped_live_with_only_the_live_map_and_correction
             assert rospy.get_param("/use_sim_time") is True
             published = dict(rospy.get_published_topics())
             assert "/path" not in published
-            t0 = rospy.get_time()
-            wait_for(lambda: rospy.get_time() > t0 + 10.0, 60.0, "10 s of the bag")
+            # until late in the bag (42 s, its clock from 0): a fixed span after the first map ran past the bag's end
+            # on a loaded machine, where the first map came late
+            wait_for(lambda: rospy.get_time() > 35.0, 120.0, "35 s of the bag")
             assert proc.poll() is None
         with lock:
             assert map_sources == {"/slam"}
