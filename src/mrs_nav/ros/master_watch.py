@@ -113,6 +113,8 @@ class MasterWatch:
             )
 
     def _restore_params(self) -> int:
+        """Set the kept values on the (new) master; how many parameters that is (a namespace counts its
+        leaves)."""
         values = dict(self._kept)
         if not rospy.rostime.is_wallclock():
             values["/use_sim_time"] = True
@@ -123,10 +125,15 @@ class MasterWatch:
             except (OSError, xmlrpc.client.Error) as err:
                 code, message = 0, str(err)
             if code == 1:
-                done += 1
+                done += _leaves(value)
             else:
                 rospy.logwarn(f"{self._who}: could not put back parameter {name} on the new master: {message}")
         return done
+
+
+def _leaves(value: Any) -> int:
+    """How many parameters ``value`` holds: a namespace (a mapping) those under it, anything else one."""
+    return sum(_leaves(inner) for inner in value.values()) if isinstance(value, dict) else 1
 
 
 def register_again() -> tuple[int, int, int]:
