@@ -30,8 +30,8 @@ START = (-1.5, -1.5)
 FIRST_GOAL = (1.5, -1.5)  # along the arena's lower side
 SECOND_GOAL = (1.5, 1.0)  # then up its right side, past the cylinder
 TOLERANCE = 0.2  # m between the truth and a reached goal (the node's 0.05 m plus SLAM's and odometry's error)
-# mrs_nav's nodes in the launch (robot_state_publisher, a C++ node of ROS's, registers only once: docs/ros.md)
 COSTMAP = ("rostopic", "echo", "-n", "1", "--noarr", "/move_base/global_costmap/costmap")
+# mrs_nav's nodes in the launch (robot_state_publisher, a C++ node of ROS's, registers only once: docs/ros.md)
 NODES = ("/simulator", "/slam", "/rrt_navigation")
 
 
