@@ -19,7 +19,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
-from mrs_nav.ros_processes import TAG_VARIABLE, free_port, kill_tagged, process, stop
+from mrs_nav.ros_processes import TAG_VARIABLE, TimeoutTransport, free_port, kill_tagged, process, stop
 
 REPO = Path(__file__).resolve().parents[1]
 __all__ = ["REPO", "RosMaster", "free_port", "ros_env", "stop", "wait_for"]
@@ -50,21 +50,8 @@ def wait_for(predicate: Callable[[], bool], timeout: float, what: str, period: f
     raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
 
 
-class _TimeoutTransport(xmlrpc.client.Transport):
-    """XML-RPC with a socket timeout: a node that stopped answering must not hang a failure report."""
-
-    def __init__(self, timeout: float) -> None:
-        super().__init__()
-        self.timeout = timeout
-
-    def make_connection(self, host: Any) -> Any:
-        connection = super().make_connection(host)
-        connection.timeout = self.timeout
-        return connection
-
-
 def _call(uri: str, method: str, *args: Any, timeout: float = 5.0) -> Any:
-    code, message, value = getattr(xmlrpc.client.ServerProxy(uri, transport=_TimeoutTransport(timeout)), method)(
+    code, message, value = getattr(xmlrpc.client.ServerProxy(uri, transport=TimeoutTransport(timeout)), method)(
         "/pytest", *args
     )
     if code != 1:
@@ -90,7 +77,7 @@ def forget_dead_nodes(master_uri: str) -> list[str]:
             dead.append(node)
         except (OSError, xmlrpc.client.Error):
             continue  # slow or half-started: not provably dead, leave it
-    master = xmlrpc.client.ServerProxy(master_uri, transport=_TimeoutTransport(5.0))
+    master = xmlrpc.client.ServerProxy(master_uri, transport=TimeoutTransport(5.0))
     for node in dead:
         try:
             api = _call(master_uri, "lookupNode", node)
@@ -240,14 +227,23 @@ class RosMaster:
         # Everything started with this environment carries the tag, so close() finds what a test left behind.
         self.tag = uuid.uuid4().hex
         self.env = {**ros_env(self.uri, log_dir), TAG_VARIABLE: self.tag}
+        self._start("roscore.out")
+
+    def _start(self, log_name: str) -> None:
         self.proc = subprocess.Popen(
             ["roscore", "-p", str(self.port)],
             env=self.env,
             start_new_session=True,
-            stdout=(log_dir / "roscore.out").open("wb"),
+            stdout=(self.log_dir / log_name).open("wb"),
             stderr=subprocess.STDOUT,
         )
         wait_for(self.is_up, 30.0, f"roscore on port {self.port}")
+
+    def restart(self) -> None:
+        """Stop roscore as Ctrl-C in its terminal does and start a new one on the same port (a new master with
+        no registrations and no parameters); its output goes to ``roscore-restarted.out``."""
+        stop(self.proc)
+        self._start("roscore-restarted.out")
 
     def is_up(self) -> bool:
         if self.proc.poll() is not None:

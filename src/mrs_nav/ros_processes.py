@@ -118,6 +118,19 @@ def stop(proc: subprocess.Popen[bytes], grace: float = 10.0) -> None:
     proc.wait(timeout=5)
 
 
+class TimeoutTransport(xmlrpc.client.Transport):
+    """XML-RPC with a socket timeout (s): a peer that stopped answering must not hang its caller."""
+
+    def __init__(self, timeout: float) -> None:
+        super().__init__()
+        self.timeout = timeout
+
+    def make_connection(self, host: Any) -> Any:
+        connection = super().make_connection(host)
+        connection.timeout = self.timeout
+        return connection
+
+
 def wait_for_master(uri: str, timeout: float = 30.0) -> None:
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:

@@ -5,8 +5,8 @@ The jumps are made deterministic by pausing the simulator (SIGSTOP) around one /
 published as ``rostopic pub -1 /clock`` does: the clock then stays where that message put it for a wall second,
 long enough for every node to see it, instead of racing the simulator's next tick; the simulator then goes on
 from its own time. A message 1 s behind the simulator is a jump back by 1 s (and then forward again); a message
-185 s ahead is, when the simulator resumes, a jump back by 185 s (what a simulator restarted under the nodes
-does).
+10 s or 185 s ahead is, when the simulator resumes, a jump back by 10 s or 185 s (185 s: what a simulator restarted
+under the nodes does).
 """
 
 from __future__ import annotations
@@ -168,6 +168,7 @@ def _moved_from(truth: TruthTrack, x: float, y: float) -> float:
     ("stack", "offset_s"),
     [
         pytest.param(SLAM, -1.0, id="slam-back-1s"),
+        pytest.param(SLAM, 10.0, id="slam-back-10s"),
         pytest.param(SLAM, 185.0, id="slam-back-185s"),
         pytest.param(AMCL, 185.0, id="amcl-back-185s"),
         pytest.param(FIELD, 185.0, id="field-back-185s"),

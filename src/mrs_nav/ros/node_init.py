@@ -23,11 +23,14 @@ from __future__ import annotations
 import signal
 import sys
 import threading
+from collections.abc import Sequence
 from types import FrameType
 
 import rospy
 from rospy.client import load_command_line_node_params
 from rospy.exceptions import ROSInitException
+
+from mrs_nav.ros.master_watch import watch_master
 
 XMLRPC_INT_MIN, XMLRPC_INT_MAX = -(2**31), 2**31 - 1
 
@@ -53,11 +56,13 @@ def _check_command_line_params(argv: list[str]) -> None:
             )
 
 
-def init_node(name: str, **kwargs: object) -> None:
+def init_node(name: str, keep_params: Sequence[str] = (), **kwargs: object) -> None:
     """``rospy.init_node`` with SIGINT and SIGTERM handled off the main thread, after checking the command line's
-    private parameters (see the module docstring)."""
+    private parameters (see the module docstring); then the node watches its master and registers again with a
+    restarted one (:mod:`mrs_nav.ros.master_watch`), putting back its private parameters and ``keep_params``."""
     signal.signal(signal.SIGINT, signal.SIG_DFL)
     _check_command_line_params(sys.argv)
     rospy.init_node(name, disable_signals=True, **kwargs)  # type: ignore[arg-type]
     signal.signal(signal.SIGINT, _shutdown_in_thread)
     signal.signal(signal.SIGTERM, _shutdown_in_thread)
+    watch_master(keep_params)
