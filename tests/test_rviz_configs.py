@@ -67,6 +67,7 @@ LAUNCHES = [
     ("slam.launch",),
     ("rrt_navigation.launch",),
     ("navigation.launch",),
+    ("navigation.launch", "navigation:=false"),
     ("multi_robot.launch",),
     ("multi_robot.launch", "robots:=2"),
     ("multi_robot.launch", "robots:=1", f"map_file:={REPO}/maps/simple.yaml"),
