@@ -30,6 +30,7 @@ RANKS: dict[str, int] = {
     "ros_processes": 2,
     "config_files": 2,  # every node parameter's default (config/*.yaml)
     "ignored_params": 1,  # gmapping/amcl/move_base parameters the nodes ignore (data)
+    "param_aliases": 1,  # move_base's names for the nodes' own parameters
     # the algorithms, each on the layers below it
     "maps": 3,
     "control": 4,

@@ -275,3 +275,16 @@ def test_ignored_foreign_parameters_are_for_real_nodes_and_never_ones_they_read(
     for node, names in IGNORED.items():
         assert not set(names) & set(node_defaults(node)), node
         assert all(reason and not reason.endswith(".") for reason in names.values()), node
+
+
+def test_move_base_aliases_name_parameters_the_node_reads_and_are_documented() -> None:
+    """Each alias stands for a parameter of the node's YAML, is not itself one, and is in the node's page."""
+    from mrs_nav.param_aliases import ALIASES
+
+    assert set(ALIASES) <= set(NODES)
+    for node, aliases in ALIASES.items():
+        assert set(aliases.values()) <= set(node_defaults(node)), node
+        assert not set(aliases) & set(node_defaults(node)), node
+        page = (CHECKOUT / "docs" / "nodes" / f"{node}.md").read_text(encoding="utf-8")
+        missing = [alias for alias in aliases if f"`~{alias}`" not in page]
+        assert not missing, f"docs/nodes/{node}.md lacks {missing}"

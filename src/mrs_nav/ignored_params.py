@@ -2,8 +2,9 @@
 
 A user's tuning of the ROS node a mrs_nav node stands in for arrives under the same private namespace; these names
 are not errors (the launch files and tutorials users bring set them) but do nothing here, so each node names them
-once at start-up with the reason (:func:`mrs_nav.ros.params.warn_unknown_params`). Names a node does use live in
-its ``config/<node>.yaml``; a name must not be in both (``tests/core/test_ignored_params.py``).
+once at start-up with the reason (:func:`mrs_nav.ros.params.unknown_params_message`). Names a node does use live in
+its ``config/<node>.yaml`` (or are move_base's names for them: :mod:`mrs_nav.param_aliases`, read, not ignored); a
+name must not be in both (``tests/core/test_ignored_params.py``).
 """
 
 from __future__ import annotations
@@ -14,7 +15,15 @@ from types import MappingProxyType
 _NO_PARTICLES = "mrs_nav SLAM has no particle filter"
 _MATCHER = "mrs_nav SLAM matches scans by a correlative search plus ICP (search_linear, search_angular)"
 _LIKELIHOOD = "mrs_nav SLAM scores scans on a likelihood field (sigma)"
-_LOCAL_PLANNER = "rrt_navigation follows its plan with its own controller (speed, epsilon, gain)"
+_LOCAL_PLANNER = (
+    "rrt_navigation follows its plan with its own controller (speed, epsilon, gain); of the local planner's names"
+    " it reads xy_goal_tolerance, yaw_goal_tolerance, max_vel_x, max_vel_theta"
+)
+_COSTMAP = (
+    "rrt_navigation keeps one obstacle grid; of the costmap's names it reads robot_radius, obstacle_range,"
+    " raytrace_range, global_frame, robot_base_frame"
+)
+_GLOBAL_PLANNER = "the global planner is chosen with planner (rrt_star|rrt); of its names allow_unknown is read"
 #: ``{node: {parameter: reason it is ignored}}`` for the stand-ins of gmapping, amcl and move_base.
 IGNORED: Mapping[str, Mapping[str, str]] = MappingProxyType(
     {
@@ -70,8 +79,10 @@ IGNORED: Mapping[str, Mapping[str, str]] = MappingProxyType(
                 "make_plan_add_unreachable_goal": "rrt_navigation plans on the map as it is",
                 "DWAPlannerROS": _LOCAL_PLANNER,
                 "TrajectoryPlannerROS": _LOCAL_PLANNER,
-                "NavfnROS": "the global planner is chosen with planner (rrt_star|rrt)",
-                "GlobalPlanner": "the global planner is chosen with planner (rrt_star|rrt)",
+                "NavfnROS": _GLOBAL_PLANNER,
+                "GlobalPlanner": _GLOBAL_PLANNER,
+                "global_costmap": _COSTMAP,
+                "local_costmap": _COSTMAP,
             }
         ),
     }

@@ -270,3 +270,32 @@ def test_record_launch_records_the_localisation(
     wait_for(bag.is_file, 30.0, "rosbag record to close the bag")
     topics = bag_topics(bag)
     assert {t: topics.get(t) for t in LOCALISATION_TOPICS} == LOCALISATION_TOPICS
+
+
+def test_request_nomotion_update_updates_a_standing_robots_filter_once(office_localisation: tuple[Any, Drive]) -> None:
+    """AMCL's request_nomotion_update (std_srvs/Empty): a robot that stands still publishes no new particle set
+    until the service is called; then the next scan updates the filter and /particlecloud and /amcl_pose come,
+    once."""
+    rospy, drive = office_localisation
+    from geometry_msgs.msg import PoseArray
+    from std_srvs.srv import Empty
+
+    wait_for(lambda: bool(drive.truth), 30.0, "the ground truth")
+    rospy.wait_for_service("/request_nomotion_update", 30.0)
+    clouds: list[float] = []
+    sub = rospy.Subscriber("/particlecloud", PoseArray, lambda m: clouds.append(m.header.stamp.to_sec()))
+    try:
+        start = drive.now
+        wait_for(lambda: drive.now > start + 2.0, 60.0, "2 s of sim time standing")
+        quiet_from = drive.now
+        wait_for(lambda: drive.now > quiet_from + 2.0, 60.0, "2 s more of sim time standing")
+        assert not [t for t in clouds if t >= quiet_from], "a standing robot's filter updated by itself"
+        t0 = drive.now
+        rospy.ServiceProxy("/request_nomotion_update", Empty)()
+        wait_for(lambda: any(t >= t0 for t in clouds), 60.0, "a /particlecloud after request_nomotion_update")
+        t1 = drive.now
+        wait_for(lambda: drive.now > t1 + 2.0, 60.0, "2 s of sim time after the update")
+    finally:
+        sub.unregister()
+    assert len([t for t in clouds if t >= t0]) == 1, clouds
+    assert drive.since(t0).size > 0  # and /amcl_pose with it

@@ -163,13 +163,13 @@ def test_make_plan_plans_without_moving_and_the_costmap_is_published(arena: dict
     from nav_msgs.msg import OccupancyGrid
     from nav_msgs.srv import GetPlan
 
-    rospy.wait_for_service("/make_plan", 30.0)
+    rospy.wait_for_service("/move_base/make_plan", 30.0)
     start, goal = PoseStamped(), PoseStamped()
     start.header.frame_id = goal.header.frame_id = "map"
     start.pose.position.x, start.pose.position.y, start.pose.orientation.w = -1.5, 1.5, 1.0
     goal.pose.position.x, goal.pose.position.y, goal.pose.orientation.w = 1.5, -1.5, 1.0
     _, x0, y0 = truth.last()
-    plan = rospy.ServiceProxy("/make_plan", GetPlan)(start=start, goal=goal, tolerance=0.0).plan
+    plan = rospy.ServiceProxy("/move_base/make_plan", GetPlan)(start=start, goal=goal, tolerance=0.0).plan
     assert plan.header.frame_id == "map"
     assert len(plan.poses) >= 2
     first, last = plan.poses[0].pose.position, plan.poses[-1].pose.position

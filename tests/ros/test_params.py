@@ -155,3 +155,60 @@ def test_rosrun_slam_with_gmapping_tuning_warns_once_naming_each(ros_master: Ros
     assert "unknown parameter ~bogus (not in slam.yaml); ignored" in warnings[0]
     assert "~minimumScore: mrs_nav SLAM matches scans by a correlative search plus ICP" in warnings[0]
     assert "~particles: mrs_nav SLAM has no particle filter; ignored" in warnings[0]
+
+
+def _apply(given: dict[str, object], **own: object) -> dict[str, object]:
+    from mrs_nav.config_files import node_defaults
+    from mrs_nav.param_aliases import apply_aliases
+
+    defaults = node_defaults("rrt_navigation")
+    return apply_aliases("rrt_navigation", {**defaults, **own}, given, defaults, _convert)
+
+
+def test_move_base_names_are_read_as_the_nodes_own_and_a_clash_is_one_error() -> None:
+    values = _apply({"DWAPlannerROS/max_vel_theta": 2.75, "global_costmap/robot_radius": 0.2})
+    assert values["max_vel_theta"] == 2.75
+    assert values["robot_radius"] == 0.2
+    # the own name at its default (loaded from the YAML) and the alias agreeing with a set own name both pass
+    assert _apply({"TrajectoryPlannerROS/xy_goal_tolerance": 0.1}, xy_goal_tolerance=0.1)["xy_goal_tolerance"] == 0.1
+    with pytest.raises(InvalidInputError, match=r"~TrajectoryPlannerROS/xy_goal_tolerance \(0.1\) is move_base's "):
+        _apply({"TrajectoryPlannerROS/xy_goal_tolerance": 0.1}, xy_goal_tolerance=0.2)
+    with pytest.raises(InvalidInputError, match=r"~global_costmap/obstacle_range \(2.0\) and .*both set"):
+        _apply({"global_costmap/obstacle_range": 2.0, "local_costmap/obstacle_range": 2.5})
+    with pytest.raises(InvalidInputError, match="~DWAPlannerROS/max_vel_x: expected a number"):
+        _apply({"DWAPlannerROS/max_vel_x": "fast"})
+
+
+def test_an_alias_is_known_and_the_rest_of_its_namespace_ignored_with_the_reason() -> None:
+    message = unknown_params_message("rrt_navigation", ["DWAPlannerROS/max_vel_x", "controller_frequency"])
+    assert message is None
+    message = unknown_params_message("rrt_navigation", ["DWAPlannerROS/max_vel_x", "DWAPlannerROS/acc_lim_x"])
+    assert message is not None
+    assert message.startswith("rrt_navigation: ~DWAPlannerROS: rrt_navigation follows")
+
+
+def test_a_launched_navigation_node_takes_move_base_tuning(ros_master: RosMaster, tmp_path: Path) -> None:
+    """TurtleBot3's DWA file puts max_vel_theta 2.75 under ~DWAPlannerROS: the node drives at that limit now,
+    and the same limit given under both names differently stops it with one line."""
+    log = tmp_path / "nav.log"
+    name = "nav_aliases"
+    env = ros_master.env
+    for key, value in (("DWAPlannerROS/max_vel_theta", "2.75"), ("global_costmap/robot_radius", "0.2")):
+        subprocess.run(["rosparam", "set", f"/{name}/{key}", value], env=env, check=True, timeout=30)
+    with process(["rosrun", "mrs_nav", "rrt_navigation", f"__name:={name}"], env, log):
+        wait_for(lambda: "max_vel_theta 2.75" in log.read_text(), 60.0, "the node's limits logged")
+    assert "robot_radius 0.2" in log.read_text()
+    assert "unknown" not in log.read_text()
+    subprocess.run(["rosparam", "set", f"/{name}/max_vel_theta", "2.0"], env=env, check=True, timeout=30)
+    done = subprocess.run(
+        ["rosrun", "mrs_nav", "rrt_navigation", f"__name:={name}"],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert done.returncode == 1
+    fatal = [line for line in (done.stdout + done.stderr).splitlines() if "[FATAL]" in line]
+    assert len(fatal) == 1
+    assert "~DWAPlannerROS/max_vel_theta (2.75) is move_base's name for ~max_vel_theta, which is set to 2.0" in fatal[0]

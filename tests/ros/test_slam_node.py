@@ -165,3 +165,25 @@ def test_a_scan_in_another_frame_never_resets_the_map(slam_sim: tuple[Any, Any])
     finally:
         for thing in (grid.sub, scans.sub, rosout, publisher):
             thing.unregister()
+
+
+def test_dynamic_map_serves_the_map_as_gmapping_does(slam_sim: tuple[Any, Any]) -> None:
+    """gmapping's ``dynamic_map`` (nav_msgs/GetMap): the map as of the call, in the map frame, the same grid as
+    the latched /map (the robot stands still: nothing was mapped since)."""
+    rospy, _proc = slam_sim
+    from nav_msgs.msg import OccupancyGrid
+    from nav_msgs.srv import GetMap
+
+    latched = Latest(rospy, "/map", OccupancyGrid)
+    try:
+        wait_for(lambda: latched.msg is not None, 60.0, "/map (latched) from the slam node")
+        rospy.wait_for_service("/dynamic_map", 30.0)
+        served = rospy.ServiceProxy("/dynamic_map", GetMap)().map
+    finally:
+        latched.sub.unregister()
+    assert served.header.frame_id == "map"
+    assert served.header.stamp >= latched.msg.header.stamp
+    assert (served.info.width, served.info.height) == (latched.msg.info.width, latched.msg.info.height)
+    assert served.info.resolution == pytest.approx(latched.msg.info.resolution)
+    occupied = sum(1 for cell in served.data if cell > 50)
+    assert occupied > 100  # the arena's walls seen from the start

@@ -177,6 +177,11 @@ class ParticleFilter:
         self._given = False
         self._reset(self._random_poses(self.config.max_particles))
 
+    def request_update(self) -> None:
+        """Update with the next scan although the robot has not moved (AMCL's ``request_nomotion_update``): the
+        particles are weighed against it, resampled when due, and the estimate recomputed."""
+        self._force_update = True
+
     def _reset(self, particles: FloatArray) -> None:
         self.particles = particles
         self._log_weights = np.zeros(len(particles))

@@ -10,8 +10,9 @@ s, dated ``transform_tolerance`` s ahead as AMCL does (:mod:`mrs_nav.ros.map_odo
 with a confident estimate (:meth:`mrs_nav.localisation.ParticleFilter.estimate`): while the filter is not, it
 stays where the last confident one put it (or is not published before the first), and the node logs the change
 once each way; ``amcl_pose`` is published after every update, its covariance telling how sure the filter is. Service
-``global_localization`` (std_srvs/Empty) spreads the particles over the free space. Parameters take AMCL's
-names (config/localisation.yaml, the README).
+``global_localization`` (std_srvs/Empty) spreads the particles over the free space; ``request_nomotion_update``
+(std_srvs/Empty) makes the next scan update the filter although the robot has not moved, as AMCL's. Parameters
+take AMCL's names (config/localisation.yaml, the README).
 
 After a 2D Pose Estimate or ``global_localization`` the filter takes only scans stamped after it: the new cloud
 describes the robot as it is then, and a node behind on its scans (10 000 particles after a global spread) would
@@ -126,6 +127,7 @@ class LocalisationNode:
         self._pose_pub = rospy.Publisher("amcl_pose", PoseWithCovarianceStamped, queue_size=2, latch=True)
         self._cloud_pub = rospy.Publisher("particlecloud", PoseArray, queue_size=2, latch=True)
         self._global_srv = rospy.Service("global_localization", Empty, self._on_global_localization)
+        self._nomotion_srv = rospy.Service("request_nomotion_update", Empty, self._on_nomotion_update)
         self._initial_sub = rospy.Subscriber("initialpose", PoseWithCovarianceStamped, self._on_initial_pose)
         if config.use_map_topic:
             self._map_sub = rospy.Subscriber("map", OccupancyGridMsg, self._on_map, queue_size=1)
@@ -194,6 +196,14 @@ class LocalisationNode:
                 rospy.loginfo("localisation: particles spread over the free space")
             else:
                 rospy.logwarn("localisation: global_localization before any map; ignored")
+        return EmptyResponse()
+
+    def _on_nomotion_update(self, _request: EmptyRequest) -> EmptyResponse:
+        with self._lock:
+            if self._filter is not None:
+                self._filter.request_update()
+            else:
+                rospy.logwarn("localisation: request_nomotion_update before any map; ignored")
         return EmptyResponse()
 
     def _on_scan(self, msg: LaserScan) -> None:

@@ -9,8 +9,10 @@ int, anything but a bool for a bool) raises :class:`InvalidInputError` naming th
 start-up with one line instead of carrying a bad value. Ranges are checked by the core configs themselves.
 
 ``private_params`` also warns once about the names under the node's ``~`` that its file lacks
-(:func:`warn_unknown_params`): a typo, or a gmapping/amcl/move_base parameter this stand-in ignores
-(:mod:`mrs_nav.ignored_params`, named with the reason), would otherwise do nothing without a word.
+(:func:`unknown_params_message`): a typo, or a gmapping/amcl/move_base parameter this stand-in ignores
+(:mod:`mrs_nav.ignored_params`, named with the reason), would otherwise do nothing without a word. move_base's
+names for the node's own parameters (``~DWAPlannerROS/max_vel_x``: :mod:`mrs_nav.param_aliases`) are read as
+those parameters.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ import rospy
 from mrs_nav.config_files import defaults_path, node_defaults
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.ignored_params import IGNORED
+from mrs_nav.param_aliases import ALIASES, apply_aliases
 
 T = TypeVar("T", bool, int, float, str)
 
@@ -60,24 +63,37 @@ def private_param(name: str, default: T) -> T:
 
 def private_params(node: str) -> dict[str, Any]:
     """Every parameter of ``node`` (``config/<node>.yaml``): ``~name`` as the type of its default there (lists
-    and mappings as given), the default where unset."""
-    warn_unknown_params(node)
+    and mappings as given), the default where unset, or the value given under move_base's name for it."""
+    given = _given_names()
+    message = unknown_params_message(node, given)
+    if message is not None:
+        rospy.logwarn(message)
+    defaults = node_defaults(node)
     values: dict[str, Any] = {}
-    for name, default in node_defaults(node).items():
+    for name, default in defaults.items():
         if isinstance(default, bool | int | float | str):
             # read as the default's own type at run time; mypy's constrained type variable takes one type a call
             values[name] = private_param(name, default)  # type: ignore[type-var]
         else:
             values[name] = rospy.get_param(f"~{name}", default)
-    return values
+    aliases = {alias: rospy.get_param(f"~{alias}") for alias in ALIASES.get(node, {}) if alias in given}
+    return apply_aliases(node, values, aliases, defaults, _convert)
+
+
+def _given_names() -> set[str]:
+    """The names under the calling node's ``~``, relative to it (``DWAPlannerROS/max_vel_x``)."""
+    prefix = rospy.get_name().rstrip("/") + "/"
+    return {name[len(prefix) :] for name in rospy.get_param_names() if name.startswith(prefix)}
 
 
 def unknown_params_message(node: str, given: Iterable[str]) -> str | None:
-    """One line naming each of ``given`` (names under the node's ``~``) that ``config/<node>.yaml`` lacks: those
-    ignored on purpose with the reason, the others as unknown; ``None`` when every name is known."""
-    known = node_defaults(node)
+    """One line naming each of ``given`` (names under the node's ``~``) that ``config/<node>.yaml`` lacks and that
+    are no alias of a name it has: those ignored on purpose with the reason, the others as unknown; ``None`` when
+    every name is known. A mapping (``DWAPlannerROS/acc_lim_x``) counts by its first name."""
+    known, aliases = node_defaults(node), ALIASES.get(node, {})
     ignored = IGNORED.get(node, {})
-    strange = sorted({name for name in given if name not in known})
+    first_names = {name.split("/")[0] for name in given if name not in aliases}
+    strange = sorted(name for name in first_names if name not in known)
     if not strange:
         return None
     parts = [f"~{name}: {ignored[name]}; ignored" for name in strange if name in ignored]
@@ -89,13 +105,3 @@ def unknown_params_message(node: str, given: Iterable[str]) -> str | None:
             f"{defaults_path(node).name}); ignored",
         )
     return f"{node}: " + ". ".join(parts)
-
-
-def warn_unknown_params(node: str) -> None:
-    """Warn once (one log line) about the calling node's private parameters that ``node``'s file lacks."""
-    prefix = rospy.get_name().rstrip("/") + "/"
-    # A mapping parameter (``~DWAPlannerROS/max_vel_x``) counts by its first name under the node's namespace.
-    given = {name[len(prefix) :].split("/")[0] for name in rospy.get_param_names() if name.startswith(prefix)}
-    message = unknown_params_message(node, given)
-    if message is not None:
-        rospy.logwarn(message)

@@ -8,7 +8,7 @@ base_footprint``, and goals (any frame tf can bring into the map frame; an all-z
 heading) on the ``move_base`` action (move_base_msgs/MoveBaseAction: goal, cancel, preemption by a new goal,
 feedback ``base_position`` every control period, result; status SUCCEEDED, ABORTED or REJECTED with a text
 reason, PREEMPTED) or on ``move_base_simple/goal`` (geometry_msgs/PoseStamped), which is re-sent as an action
-goal (as move_base does) so both take the same path. Service ``make_plan`` (nav_msgs/GetPlan) plans without
+goal (as move_base does) so both take the same path. Service ``move_base/make_plan`` (nav_msgs/GetPlan) plans without
 moving (an empty path when it finds none); service ``move_base/clear_costmaps`` (std_srvs/Empty) drops every
 obstacle the laser marked, as move_base's. ``amcl_pose`` and ``initialpose`` (geometry_msgs/
 PoseWithCovarianceStamped) decide when scans may mark obstacles (:mod:`mrs_nav.navigation.marking`: only while the
@@ -160,7 +160,7 @@ class RrtNavigationNode:
             rospy.Subscriber("amcl_pose", PoseWithCovarianceStamped, self._on_localisation, queue_size=10),
             rospy.Subscriber("initialpose", PoseWithCovarianceStamped, self._on_initial_pose, queue_size=1),
         ]
-        self._plan_service = rospy.Service("make_plan", GetPlan, self._on_make_plan)
+        self._plan_service = rospy.Service("move_base/make_plan", GetPlan, self._on_make_plan)
         self._clear_service = rospy.Service("move_base/clear_costmaps", Empty, self._on_clear_costmaps)
         # The planner thread holds the GIL for long stretches; the default 5 ms switch interval would delay each
         # /clock, /tf and timer hand-off of the control loop by up to that, which is what paces a lockstep sim.

@@ -17,7 +17,9 @@ waits), so a controller ticking on sim time keeps up at any rate (see
 :mod:`mrs_nav.sim.lockstep`: free running before the first command and after ``~lockstep_timeout`` wall seconds
 of silence). A bad ``cmd_vel`` (non-finite numbers) is logged and ignored; the watchdog then stops the robot.
 ``~add_box`` (visualization_msgs/Marker of type CUBE: pose in the world frame, scale = full sizes in m, ``ns``
-its name) puts a box into the world at run time, e.g. across a corridor after the map was made.
+its name) puts a box into the world at run time, e.g. across a corridor after the map was made. A goal on
+``move_base_simple/goal`` (rviz's 2D Nav Goal) that no navigation node listens for is warned of once
+(:mod:`mrs_nav.ros.unheard_goal`).
 
 ``~set_pose`` (geometry_msgs/Pose2D, world frame) teleports the robot, stopped, without its odometry noticing:
 the kidnapped-robot test of a localisation. A pose inside an obstacle is logged and ignored.
@@ -70,6 +72,7 @@ from mrs_nav.ros.conversions import (
     twist_from_msg,
 )
 from mrs_nav.ros.params import private_params
+from mrs_nav.ros.unheard_goal import UnheardGoalWarning
 from mrs_nav.sim import (
     LaserParams,
     LockstepConfig,
@@ -278,6 +281,9 @@ class SimulatorNode:
             for robot, name in zip(self.fleet.robots, names, strict=True)
         ]
         self._box_sub = rospy.Subscriber("~add_box", Marker, self._on_add_box, queue_size=10)
+        self._unheard_goals = [
+            UnheardGoalWarning("simulator", (f"{name}/" if name else "") + "move_base_simple/goal") for name in names
+        ]
         self._set_own_time = _own_the_clock()
         self._clock_sent = -math.inf  # sim time of the last /clock published
 

@@ -4,7 +4,8 @@ Subscribes ``scan`` (sensor_msgs/LaserScan). For every scan it looks up the odom
 (``odom_frame -> base_frame``) at the scan's stamp through tf, waiting up to ``~tf_wait`` s for the odometry to
 catch up instead of dropping the scan on extrapolation, and feeds the pair to the core, which processes it when
 the update gates open. Publishes ``map`` (nav_msgs/OccupancyGrid, latched) and ``map_metadata`` (latched) every
-``~map_update_interval`` s of map change, and tf ``map_frame -> odom_frame`` every ``~transform_publish_period``
+``~map_update_interval`` s of map change, and serves the map as of the call on ``dynamic_map`` (nav_msgs/GetMap,
+as gmapping), and tf ``map_frame -> odom_frame`` every ``~transform_publish_period``
 s (20 Hz by default). Parameters take gmapping's names (see config/slam.yaml and the README).
 
 A scan that cannot be used (wrong length, NaN angles, bad geometry, no transform, a pose far outside any
@@ -29,6 +30,7 @@ from typing import Any
 import rospy
 import tf2_ros
 from nav_msgs.msg import MapMetaData, OccupancyGrid
+from nav_msgs.srv import GetMap, GetMapRequest, GetMapResponse
 from sensor_msgs.msg import LaserScan
 from std_srvs.srv import Empty, EmptyRequest, EmptyResponse
 
@@ -100,6 +102,7 @@ class SlamNode:
         self._time_jump = TimeJumpGuard("slam", self._on_time_jump, self._buffer)
         self._timer = self._time_jump.timer(config.transform_publish_period, self._publish_transform)
         self._reset_srv = rospy.Service("~reset", Empty, self._on_reset)
+        self._map_srv = rospy.Service("dynamic_map", GetMap, self._on_dynamic_map)
 
     # -- scans ----------------------------------------------------------------------------------------------------
 
@@ -179,10 +182,11 @@ class SlamNode:
         if correction is not None:
             self._map_odom.send(correction)
 
-    def _publish_map(self, stamp: rospy.Time) -> None:
+    def _map_message(self, stamp: rospy.Time) -> OccupancyGrid | None:
+        """The map as it is now, stamped ``stamp``; None before the first processed scan."""
         with self._lock:
             if self._slam is None:
-                return
+                return None
             grid = self._slam.grid
             data = grid.to_occupancy()
             info = MapMetaData()
@@ -195,9 +199,22 @@ class SlamNode:
         msg.header.frame_id = self.config.map_frame
         msg.info = info
         msg.data = data.ravel().tolist()
+        return msg
+
+    def _publish_map(self, stamp: rospy.Time) -> None:
+        msg = self._map_message(stamp)
+        if msg is None:
+            return
         publish_unless_shutdown(self._map_pub, msg, "slam")
-        publish_unless_shutdown(self._meta_pub, info, "slam")
+        publish_unless_shutdown(self._meta_pub, msg.info, "slam")
         self._last_map_time = stamp.to_sec()
+
+    def _on_dynamic_map(self, _request: GetMapRequest) -> GetMapResponse:
+        """gmapping's ``dynamic_map``: the map as of now (an error before the first scan is mapped, as gmapping)."""
+        msg = self._map_message(rospy.Time.now())
+        if msg is None:
+            raise rospy.ServiceException("slam: no map yet (no scan mapped)")
+        return GetMapResponse(map=msg)
 
     def spin(self) -> None:
         rospy.spin()

@@ -252,3 +252,23 @@ def test_rooms_unknown_in_the_map_do_not_make_the_filter_lose_the_robot() -> Non
             sim_config=_sim(seed),
         )
         assert run.position_errors.max() < 0.15
+
+
+def test_a_nomotion_update_weighs_the_next_scan_of_a_standing_robot() -> None:
+    """AMCL's request_nomotion_update: without it a standing robot's scans change nothing; with it the next scan
+    updates the filter once (particles resampled, estimate drawn towards the truth), and the one after does not."""
+    world, grid = office()
+    pf = ParticleFilter(grid, LocalisationConfig(seed=0, max_particles=2000))
+    scan = _scan_at(world, START)
+    odom = Pose2D(0.0, 0.0, 0.0)
+    pf.set_pose(Pose2D(START.x + 0.3, START.y, 0.0), np.diag([0.04, 0.04, 0.01]))
+    assert pf.update(odom, scan)  # the given pose is weighed at once
+    before = pf.particles.copy()
+    assert not pf.update(odom, scan)
+    assert np.array_equal(pf.particles, before)
+    error = abs(pf.estimate().pose.x - START.x)
+    pf.request_update()
+    assert pf.update(odom, scan)
+    assert not np.array_equal(pf.particles, before)
+    assert abs(pf.estimate().pose.x - START.x) < error
+    assert not pf.update(odom, scan)
