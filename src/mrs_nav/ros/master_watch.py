@@ -44,7 +44,7 @@ from mrs_nav.master_restart import MasterLiveness, MasterState
 from mrs_nav.ros_processes import TimeoutTransport
 
 POLL_PERIOD_S = 1.0  # wall s between two questions to the master
-CALL_TIMEOUT_S = 5.0  # wall s a master call may take before the master counts as lost (a loaded machine is slow)
+CALL_TIMEOUT_S = 5.0  # wall s a master call may take; a call that times out is skipped, only a refusal means lost
 
 
 class MasterWatch:
@@ -75,8 +75,11 @@ class MasterWatch:
         return int(reply[0]), str(reply[1]), reply[2]
 
     def _pid(self) -> int | None:
+        """The master's pid, or None when it is not there; raises TimeoutError when it is there but slow."""
         try:
             code, _, pid = self._ask("getPid")
+        except TimeoutError:
+            raise
         except (OSError, xmlrpc.client.Error):
             return None
         return int(pid) if code == 1 else None
@@ -98,7 +101,11 @@ class MasterWatch:
         """Ask the master once and act on what changed."""
         # Read before asking the pid: the values count only if the same master answers after them.
         params = self._read_params()
-        change = self._liveness.observe(self._pid())
+        try:
+            pid = self._pid()
+        except TimeoutError:
+            return  # slow, not gone (a loaded machine's master answers late): no "lost", no registering again
+        change = self._liveness.observe(pid)
         if change is None:
             if params is not None:
                 self._kept = params
