@@ -116,7 +116,7 @@ def test_nodes_register_again_with_a_restarted_master_and_the_next_goal_is_reach
         status = _ros(master, "rostopic", "info", "/move_base/status")
         assert "/rrt_navigation" in status.split("Subscribers:")[0], status
         services = _ros(master, "rosservice", "list").split()
-        assert "/make_plan" in services, services
+        assert "/move_base/make_plan" in services, services
         # the parameters the nodes own are back: the launch file's /use_sim_time and robot_description (kept by
         # the simulator) and each node's ~ parameters
         params = set(_ros(master, "rosparam", "list").split())
