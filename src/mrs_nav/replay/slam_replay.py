@@ -39,7 +39,7 @@ from mrs_nav.slam.eval.consistency import (
     is_broken,
 )
 from mrs_nav.slam.eval.metrics import TrajectoryErrors, align_se2, trajectory_errors
-from mrs_nav.slam.eval.relations import Relation, relation_errors
+from mrs_nav.slam.eval.relations import Relation, bridged, choose_offset, relation_errors
 from mrs_nav.slam.scan import BeamSplit, split_beams
 from mrs_nav.slam.slam import Slam
 
@@ -99,15 +99,21 @@ class SlamReplay:
 
     def relation_errors(self, relations: list[Relation], offset: float | None = None) -> dict[str, Any]:
         """The relations metric (:mod:`mrs_nav.slam.eval.relations`) of the SLAM trajectory, and of the bag's ground
-        truth bridged the same way (``relations_reference_*``: the floor the bridging leaves) when it has one."""
-        stamps = self.stamps
+        truth bridged the same way (``relations_reference_*``: the floor the bridging leaves) when it has one.
+
+        The clock offset is ``offset`` or found on the ground truth when the bag has it for every scan, else on the
+        odometry: never on the trajectory being scored, which would pick the offset that flatters it."""
+        stamps, odometry = self.stamps, self.odometry
         estimate = [p.pose for p in self.slam.processed]
-        mine = relation_errors(relations, stamps, estimate, self.odom_track.at, self.odometry, offset=offset)
-        out: dict[str, Any] = mine.as_dict()
         truth = [t for t in self.truth if t is not None]
-        if len(truth) == len(estimate):
-            # The truth's own odometry is unknown: bridge it with the same wheel odometry.
-            floor = relation_errors(relations, stamps, truth, self.odom_track.at, self.odometry, offset=mine.offset_s)
+        reference = truth if len(truth) == len(estimate) else None
+        anchor = bridged(stamps, reference or odometry, self.odom_track, odometry)
+        choice = choose_offset(relations, anchor, offset)
+        mine = relation_errors(relations, bridged(stamps, estimate, self.odom_track, odometry), choice)
+        out: dict[str, Any] = mine.as_dict()
+        if reference is not None:
+            # The truth's own odometry is unknown: it is bridged with the same wheel odometry.
+            floor = relation_errors(relations, anchor, choice)
             out["relations_reference_trans_mean_m"] = floor.trans_mean_m
             out["relations_reference_rot_mean_deg"] = floor.rot_mean_deg
         return out

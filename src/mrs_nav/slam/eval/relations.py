@@ -7,39 +7,43 @@ is compared with the reference ``r``: ``e = inv(r) d``; the translational error 
 rotational error ``|e.yaw|`` (deg). The metric is their mean and standard deviation over the relations, as in
 the published tables (gmapping 0.070 +- 0.083 m on the Intel log; Cartographer 0.0229 +- 0.0239 m).
 
-Time: relation stamps are those of the raw log, a constant offset from the stamps of a corrected log. The offset
-is given, or found as the most common difference (to 1 ms) between a relation stamp and a trajectory stamp:
-the ends of many relations are scans that the trajectory also has, and only the true offset makes those
-differences agree. At least :data:`MIN_OFFSET_VOTES` must agree and no other offset as many (evenly spaced scans
-make shifted offsets tie), else the offset must be given.
+Time: relation stamps are those of the raw log, a constant offset from the stamps of a corrected log; it is given
+or found by the relations' own geometry (:mod:`.relation_offset`), which refuses when the evidence is weak.
 
-A relation end between trajectory poses is bridged by odometry, ``P(t) = C(t) O(t)``: ``O(t)`` the odometry
-interpolated at ``t`` and ``C(t)`` the correction ``P_k inv(O_k)`` (map -> odom) interpolated linearly (x, y, yaw)
-between the trajectory poses before and after ``t``, as a SLAM system's correction moves between its updates.
-Relations with an end where there is no odometry (outside its time span) are not scored (counted). Bridging puts a
-floor under the metric that depends on the odometry, so :func:`relation_errors` of the reference trajectory itself
-is worth reporting beside a result.
+A relation end between trajectory poses is bridged by odometry (:mod:`.bridging`). Relations with an end where
+there is no odometry (outside its time span) are not scored (counted). Bridging puts a floor under the metric that
+depends on the odometry, so :func:`relation_errors` of the reference trajectory itself is worth reporting beside a
+result.
 """
 
 from __future__ import annotations
 
-import bisect
 import itertools
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 
 from mrs_nav.errors import InvalidInputError
-from mrs_nav.geometry import Pose2D, wrap_angle
+from mrs_nav.geometry import Pose2D
+from mrs_nav.slam.eval.bridging import BridgedTrajectory, as_rows, relation_residuals
+from mrs_nav.slam.eval.relation_offset import OffsetChoice, RelationArrays, find_offset
 from mrs_nav.textfiles import bounded_lines, check_regular
 
-MIN_OFFSET_VOTES = 3
 MAX_RELATIONS = 1_000_000  # lines; the published files hold a few thousand
 _MAX_LINE_CHARS = 4096  # a relation is two stamps and six numbers
-OFFSET_RESOLUTION_S = 1e-3
+
+
+class OdometryTrack(Protocol):
+    """Odometry poses at increasing stamps (s), held ``tolerance`` s past its ends (as
+    :class:`mrs_nav.replay.pose_track.PoseTrack`)."""
+
+    stamps: list[float]
+    poses: list[Pose2D]
+    tolerance: float
 
 
 @dataclass(frozen=True)
@@ -61,9 +65,9 @@ class RelationErrors:
     rot_std_deg: float
     scored: int
     skipped: int
-    offset_s: float
+    offset: OffsetChoice
 
-    def as_dict(self) -> dict[str, float | int]:
+    def as_dict(self) -> dict[str, float | int | str]:
         return {
             "relations_trans_mean_m": self.trans_mean_m,
             "relations_trans_std_m": self.trans_std_m,
@@ -71,7 +75,12 @@ class RelationErrors:
             "relations_rot_std_deg": self.rot_std_deg,
             "relations_scored": self.scored,
             "relations_skipped": self.skipped,
-            "relations_offset_s": self.offset_s,
+            "relations_offset_s": self.offset.offset_s,
+            # how the offset was found, and the evidence: see mrs_nav.slam.eval.relation_offset
+            "relations_offset_rule": self.offset.rule,
+            "relations_offset_support": self.offset.support,
+            "relations_offset_runner_up_s": self.offset.runner_up_s,
+            "relations_offset_runner_up_support": self.offset.runner_up_support,
         }
 
 
@@ -107,82 +116,60 @@ def _relation(words: list[str], where: str) -> Relation:
     return Relation(t1, t2, Pose2D(x, y, yaw))
 
 
-def find_offset(relations: Sequence[Relation], stamps: Sequence[float]) -> float:
-    """The clock offset ``relation stamp - trajectory stamp`` by the module's rule (s)."""
-    ends = np.unique(np.array([[r.t1, r.t2] for r in relations]).ravel())
-    mine = np.asarray(stamps, dtype=np.float64)
-    if mine.size == 0:
-        raise InvalidInputError("relations metric: the trajectory is empty")
-    votes: dict[int, int] = {}
-    # Chunked so that a large file never builds a huge difference matrix at once.
-    for chunk in np.array_split(ends, max(1, ends.size * mine.size // 2_000_000)):
-        keys, counts = np.unique(np.round((chunk[:, None] - mine[None, :]) / OFFSET_RESOLUTION_S), return_counts=True)
-        for key, count in zip(keys[counts > 1].tolist(), counts[counts > 1].tolist(), strict=True):
-            votes[int(key)] = votes.get(int(key), 0) + int(count)
-    ranked = sorted(votes.items(), key=lambda kv: kv[1], reverse=True)
-    best = ranked[0] if ranked else (0, 0)
-    if len(ranked) > 1 and ranked[1][1] == best[1]:
-        raise InvalidInputError(
-            f"relations metric: clock offsets {best[0] * OFFSET_RESOLUTION_S:.3f} s and "
-            f"{ranked[1][0] * OFFSET_RESOLUTION_S:.3f} s match equally many stamps (evenly spaced scans); "
-            "give it with --relations-offset"
-        )
-    if best[1] < MIN_OFFSET_VOTES:
-        raise InvalidInputError(
-            "relations metric: no clock offset between the relations and the trajectory is supported by "
-            f"{MIN_OFFSET_VOTES} or more matching stamps; give it with --relations-offset"
-        )
-    return best[0] * OFFSET_RESOLUTION_S
+def relation_arrays(relations: Sequence[Relation]) -> RelationArrays:
+    """``relations`` as arrays (:class:`RelationArrays`)."""
+    stamps = np.array([(r.t1, r.t2) for r in relations], dtype=np.float64).reshape(-1, 2)
+    return RelationArrays(stamps, as_rows([r.delta for r in relations]))
 
 
-def relation_errors(
-    relations: Sequence[Relation],
-    stamps: Sequence[float],
-    poses: Sequence[Pose2D],
-    odometry: Callable[[float], Pose2D | None],
-    odom_at_poses: Sequence[Pose2D],
-    *,
-    offset: float | None = None,
-) -> RelationErrors:
-    """Score the trajectory ``poses`` at ``stamps`` on ``relations`` (see the module doc).
-
-    ``odometry(t)`` is the odometry pose at time ``t`` (trajectory clock) or None outside its span, and
-    ``odom_at_poses`` the odometry at each trajectory pose.
-    """
-    if not (len(stamps) == len(poses) == len(odom_at_poses)) or len(stamps) < 2:
+def bridged(
+    stamps: Sequence[float], poses: Sequence[Pose2D], odometry: OdometryTrack, odom_at_poses: Sequence[Pose2D]
+) -> BridgedTrajectory:
+    """The trajectory ``poses`` at ``stamps`` bridged by ``odometry`` (``odom_at_poses``: the odometry at each
+    trajectory pose)."""
+    if not (len(stamps) == len(poses) == len(odom_at_poses)) or len(stamps) < 2 or len(odometry.stamps) < 2:
         raise InvalidInputError("relations metric needs >= 2 trajectory poses with stamps and odometry")
     if any(b <= a for a, b in itertools.pairwise(stamps)):
         raise InvalidInputError("relations metric needs trajectory stamps in increasing order")
-    shift = find_offset(relations, stamps) if offset is None else offset
+    return BridgedTrajectory.of(
+        stamps,
+        as_rows(poses),
+        as_rows(odom_at_poses),
+        odom_stamps=odometry.stamps,
+        odom_poses=as_rows(odometry.poses),
+        odom_tolerance=odometry.tolerance,
+    )
 
-    corrections = [p.compose(o.inverse()) for p, o in zip(poses, odom_at_poses, strict=True)]
 
-    def pose_at(t: float) -> Pose2D | None:
-        odom = odometry(t)
-        if odom is None:
-            return None
-        i = min(max(bisect.bisect_left(stamps, t), 1), len(stamps) - 1)
-        f = min(max((t - stamps[i - 1]) / (stamps[i] - stamps[i - 1]), 0.0), 1.0)
-        a, b = corrections[i - 1], corrections[i]
-        correction = Pose2D(
-            a.x + f * (b.x - a.x), a.y + f * (b.y - a.y), wrap_angle(a.yaw + f * wrap_angle(b.yaw - a.yaw))
-        )
-        return correction.compose(odom)
+def choose_offset(
+    relations: Sequence[Relation], reference: BridgedTrajectory, given: float | None = None
+) -> OffsetChoice:
+    """The offset ``given``, or the one the relations' geometry finds on ``reference`` (see :func:`find_offset`)."""
+    if given is not None:
+        return OffsetChoice(given, "given")
+    return find_offset(relation_arrays(relations), reference)
 
-    trans: list[float] = []
-    rot: list[float] = []
-    for relation in relations:
-        a, b = pose_at(relation.t1 - shift), pose_at(relation.t2 - shift)
-        if a is None or b is None:
-            continue
-        error = relation.delta.inverse().compose(b.relative_to(a))
-        trans.append(math.hypot(error.x, error.y))
-        rot.append(abs(error.yaw))
-    if not trans:
+
+def relation_errors(
+    relations: Sequence[Relation], trajectory: BridgedTrajectory, offset: OffsetChoice
+) -> RelationErrors:
+    """Score ``trajectory`` on ``relations`` at the clock ``offset`` (see the module doc)."""
+    arrays = relation_arrays(relations)
+    start, valid1 = trajectory.poses_at(arrays.t1 - offset.offset_s)
+    end, valid2 = trajectory.poses_at(arrays.t2 - offset.offset_s)
+    valid = valid1 & valid2
+    if not valid.any():
         raise InvalidInputError(
-            f"relations metric: no relation falls within the trajectory's time span (offset {shift:.3f} s)"
+            f"relations metric: no relation falls within the trajectory's time span (offset {offset.offset_s:.3f} s)"
         )
-    t, r = np.asarray(trans), np.degrees(np.asarray(rot))
+    trans, rot = relation_residuals(start[valid], end[valid], arrays.delta[valid])
+    rot_deg = np.degrees(rot)
     return RelationErrors(
-        float(t.mean()), float(t.std()), float(r.mean()), float(r.std()), t.size, len(relations) - t.size, shift
+        float(trans.mean()),
+        float(trans.std()),
+        float(rot_deg.mean()),
+        float(rot_deg.std()),
+        trans.size,
+        len(relations) - trans.size,
+        offset,
     )
