@@ -62,7 +62,7 @@ class SessionReplay:
 def check_types(bag: Path) -> None:
     """Raise :class:`BagError` when a session topic of ``bag`` has another type than a recording's."""
     for topic, msgtype in sorted(bag_topics(bag).items()):
-        expected = topics.RECORDED_TOPICS.get(topic)
+        expected = topics.SESSION_TYPES.get(topic)
         if expected is not None and msgtype != expected:
             raise BagError(f"bag {bag}: topic {topic} has type {msgtype}, expected {expected}")
 
