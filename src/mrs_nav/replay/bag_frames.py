@@ -7,7 +7,8 @@ frames such as ``odom -> base_link -> laser``, the laser's mounting on ``/tf_sta
 first scan whose frame they link to the base frame and returns :class:`BagFrames`:
 
 * the laser frame is the scan's ``header.frame_id``; its mounting is its planar pose in the base frame, from the
-  first transform of each edge between them (``/tf_static``, or ``/tf`` for tf's ``static_transform_publisher``);
+  first transform of each edge between them (``/tf_static``, or ``/tf`` for tf's ``static_transform_publisher``),
+  composed in 3-D so that a laser mounted upside down (z axis down) has its angles mirrored;
 * odometry is ``odom_topic`` (``nav_msgs/Odometry``) when the bag has it, else tf ``odom_frame -> base frame``;
 * the base frame, unless given, is the one the odometry moves: ``/odom``'s ``child_frame_id`` or the child of
   ``odom_frame`` in tf.
@@ -19,15 +20,23 @@ read with the laser at the base frame's origin, and says so.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+import numpy.typing as npt
+
 from mrs_nav.bag import topics
 from mrs_nav.bag.io import bag_topics, read_messages
+from mrs_nav.bag.messages import scan_from_message
 from mrs_nav.config_files import node_default
 from mrs_nav.errors import BagError
 from mrs_nav.geometry import Pose2D, yaw_from_quaternion
+from mrs_nav.slam.scan import LaserScanData
+
+Matrix = npt.NDArray[np.float64]
 
 _slam_default = functools.partial(node_default, "slam")
 
@@ -53,10 +62,19 @@ class BagFrames:
     base_frame: str
     laser_frame: str
     mounting: Pose2D
+    laser_upside_down: bool
     odometry_topic: str | None
     odom_child: str
     base_in_odom_child: Pose2D | None
     note: str = ""
+
+    def scan(self, message: Any) -> LaserScanData:
+        """The core scan of a ``sensor_msgs/LaserScan`` in the laser frame, as seen from above: a laser mounted
+        upside down sweeps the other way round, so its angles change sign."""
+        scan = scan_from_message(message)
+        if not self.laser_upside_down:
+            return scan
+        return LaserScanData(-scan.angle_min, -scan.angle_increment, scan.range_min, scan.range_max, scan.ranges)
 
 
 def frame_name(name: str) -> str:
@@ -70,41 +88,69 @@ def transform_pose(transform: Any) -> Pose2D:
     return Pose2D(float(t.x), float(t.y), yaw_from_quaternion(q.x, q.y, q.z, q.w))
 
 
+def _matrix(transform: Any) -> Matrix:
+    """The 4x4 homogeneous matrix of a ``geometry_msgs/TransformStamped`` (its quaternion normalised)."""
+    t, q = transform.transform.translation, transform.transform.rotation
+    x, y, z, w = (float(v) for v in (q.x, q.y, q.z, q.w))
+    norm = math.sqrt(x * x + y * y + z * z + w * w)
+    if norm > 0.0:
+        x, y, z, w = x / norm, y / norm, z / norm, w / norm
+    matrix = np.eye(4)
+    matrix[:3, :3] = [
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ]
+    matrix[:3, 3] = [float(t.x), float(t.y), float(t.z)]
+    return matrix
+
+
+def planar(matrix: Matrix) -> Pose2D:
+    """The planar pose of a 4x4 transform: its position and the heading of its x axis."""
+    return Pose2D(float(matrix[0, 3]), float(matrix[1, 3]), math.atan2(matrix[1, 0], matrix[0, 0]))
+
+
+def upside_down(matrix: Matrix) -> bool:
+    """Whether a frame's z axis points down in its parent: a laser mounted so sweeps the other way round."""
+    return bool(matrix[2, 2] < 0.0)
+
+
 class FrameTree:
-    """The first transform seen of every ``parent -> child`` edge: the fixed part of a robot's tf tree."""
+    """The first transform seen of every ``parent -> child`` edge: the fixed part of a robot's tf tree, in 3-D (a
+    laser mounted upside down is a rotation about x)."""
 
     def __init__(self) -> None:
-        self.parents: dict[str, tuple[str, Pose2D]] = {}
+        self.parents: dict[str, tuple[str, Matrix]] = {}
 
     def add(self, message: Any) -> None:
         """Take the edges of a ``tf2_msgs/TFMessage`` not seen before."""
         for transform in message.transforms:
             child = frame_name(transform.child_frame_id)
             if child not in self.parents:
-                self.parents[child] = (frame_name(transform.header.frame_id), transform_pose(transform))
+                self.parents[child] = (frame_name(transform.header.frame_id), _matrix(transform))
 
     def children(self, parent: str) -> list[str]:
         return [child for child, (p, _) in self.parents.items() if p == parent]
 
-    def _ancestors(self, frame: str) -> dict[str, Pose2D]:
-        """``frame``'s pose in itself and in each frame above it."""
-        chain = {frame: Pose2D(0.0, 0.0, 0.0)}
-        pose, current = chain[frame], frame
+    def _ancestors(self, frame: str) -> dict[str, Matrix]:
+        """``frame``'s transform in itself and in each frame above it."""
+        chain = {frame: np.eye(4)}
+        matrix, current = chain[frame], frame
         while current in self.parents:
             current, edge = self.parents[current]
             if current in chain:  # a loop in a malformed tree
                 break
-            pose = edge.compose(pose)
-            chain[current] = pose
+            matrix = edge @ matrix
+            chain[current] = matrix
         return chain
 
-    def relative(self, base: str, frame: str) -> Pose2D | None:
-        """``frame``'s pose in ``base`` through their nearest common frame, None when no edges link them."""
+    def relative(self, base: str, frame: str) -> Matrix | None:
+        """``frame``'s transform in ``base`` through their nearest common frame, None when no edges link them."""
         above_frame, above_base = self._ancestors(frame), self._ancestors(base)
         common = next((f for f in above_frame if f in above_base), None)
         if common is None:
             return None
-        return above_base[common].inverse().compose(above_frame[common])
+        return np.asarray(np.linalg.inv(above_base[common]) @ above_frame[common], dtype=np.float64)
 
     @property
     def frames(self) -> list[str]:
@@ -155,7 +201,7 @@ def resolve_frames(bag: Path, names: BagNames) -> BagFrames:
         )
     if not has_tf:
         note = f"bag {bag} has no tf: the laser (frame '{found.laser_frame}') is taken at the origin of '{base}'"
-        at_base = (base, base, Pose2D(0.0, 0.0, 0.0))
+        at_base = (base, base, np.eye(4))
         return _frames(tree, names, found.laser_frame, at_base, has_odom=has_odom, note=note)
     raise BagError(
         f"bag {bag}: tf never links the laser frame '{found.laser_frame}' (of {names.scan_topic}) to the base frame "
@@ -163,7 +209,7 @@ def resolve_frames(bag: Path, names: BagNames) -> BagFrames:
     )
 
 
-def _linked(tree: FrameTree, names: BagNames, found: _Found, has_odom: bool) -> tuple[str, str, Pose2D] | None:
+def _linked(tree: FrameTree, names: BagNames, found: _Found, has_odom: bool) -> tuple[str, str, Matrix] | None:
     """(odometry child frame, base frame, laser mounting in the base) once the transforms read so far link them."""
     if found.laser_frame is None:
         return None
@@ -179,7 +225,7 @@ def _linked(tree: FrameTree, names: BagNames, found: _Found, has_odom: bool) -> 
 
 
 def _frames(
-    tree: FrameTree, names: BagNames, laser: str, link: tuple[str, str, Pose2D], *, has_odom: bool, note: str = ""
+    tree: FrameTree, names: BagNames, laser: str, link: tuple[str, str, Matrix], *, has_odom: bool, note: str = ""
 ) -> BagFrames:
     """The frames found; ``link``: (odometry child frame, base frame, laser mounting in the base)."""
     child, base, mounting = link
@@ -187,4 +233,14 @@ def _frames(
     if not has_odom:
         source = f"odometry from tf {names.odom_frame} -> {child} (no {names.odom_topic} topic)"
         note = f"{note}; {source}" if note else source
-    return BagFrames(names, base, laser, mounting, names.odom_topic if has_odom else None, child, base_in_child, note)
+    return BagFrames(
+        names=names,
+        base_frame=base,
+        laser_frame=laser,
+        mounting=planar(mounting),
+        laser_upside_down=upside_down(mounting),
+        odometry_topic=names.odom_topic if has_odom else None,
+        odom_child=child,
+        base_in_odom_child=None if base_in_child is None else planar(base_in_child),
+        note=note,
+    )

@@ -28,7 +28,7 @@ import numpy.typing as npt
 from mrs_nav.atomic_write import atomic_path, write_text
 from mrs_nav.bag import topics
 from mrs_nav.bag.io import read_messages
-from mrs_nav.bag.messages import pose_from_odometry, scan_from_message, stamp_of
+from mrs_nav.bag.messages import pose_from_odometry, stamp_of
 from mrs_nav.errors import BagError, InvalidInputError, MrsNavError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.maps.map_io import save_map
@@ -237,7 +237,7 @@ def truth_scans(bag: Path, result: SlamReplay) -> Callable[[], Iterator[tuple[Po
         for _, _, msg in read_messages(bag, [result.frames.names.scan_topic]):
             pose = left.pop(stamp_of(msg), None)
             if pose is not None:
-                scan = scan_from_message(msg)
+                scan = result.frames.scan(msg)
                 usable = slam.config.usable_range(scan.range_max)
                 yield pose.compose(slam.laser_pose), split_beams(scan, usable, slam.config.maxRange)
 
@@ -279,7 +279,7 @@ def _process(result: SlamReplay, stamp: float, msg: Any, odom: PoseTrack, truth:
         return
     t0 = time.process_time()
     try:
-        done = result.slam.add_scan(pose, scan_from_message(msg), stamp)
+        done = result.slam.add_scan(pose, result.frames.scan(msg), stamp)
     except MrsNavError as err:
         result.reject(f"{where}: {err}")
         return

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mrs_nav.bag.io import TF_MESSAGE, BagWriter
+from mrs_nav.bag.io import TF_MESSAGE, BagWriter, typestore
 from mrs_nav.bag.messages import LASER_SCAN, ODOMETRY, laser_scan_message, odometry_message, tf_message
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.world import load_world
@@ -96,22 +96,36 @@ def write_package_bag(drive: Drive, path: Path) -> Path:
 
 
 def write_foreign_bag(
-    drive: Drive, path: Path, *, scan_topic: str = "/scan", odom_frame: str = "odom", mount_frame: str = "laser"
+    drive: Drive,
+    path: Path,
+    *,
+    scan_topic: str = "/scan",
+    odom_frame: str = "odom",
+    mount_frame: str = "laser",
+    upside_down: bool = False,
 ) -> Path:
     """The drive as a gmapping tutorial records another robot: ``/scan`` and ``/tf`` only (module docstring).
 
-    ``mount_frame`` other than ``laser`` puts the mounting on a frame the scans do not name (tf never links them).
+    ``mount_frame`` other than ``laser`` puts the mounting on a frame the scans do not name (tf never links them);
+    ``upside_down`` mounts the laser rolled by 180 degrees, so its angles run the other way round.
     """
     next_mount = 0.0
     with BagWriter(path) as writer:
         for stamp, pose in drive.odometry:
             writer.write("/tf", TF_MESSAGE, _ns(stamp), tf_message(pose, stamp, odom_frame, "base_link"))
             if stamp >= next_mount:
-                writer.write("/tf", TF_MESSAGE, _ns(stamp), tf_message(MOUNT, stamp, "base_link", mount_frame))
+                mount = tf_message(MOUNT, stamp, "base_link", mount_frame)
+                if upside_down:
+                    mount.transforms[0].transform.rotation = typestore().types["geometry_msgs/msg/Quaternion"](
+                        x=1.0, y=0.0, z=0.0, w=0.0
+                    )
+                writer.write("/tf", TF_MESSAGE, _ns(stamp), mount)
                 next_mount = stamp + 0.1
         for stamp, ranges in drive.scans:
-            message = laser_scan_message(_scan(ranges, decreasing=True), stamp, "laser")
-            writer.write(scan_topic, LASER_SCAN, _ns(stamp), message)
+            scan = _scan(ranges, decreasing=True)
+            if upside_down:
+                scan = LaserScanData(-scan.angle_min, -scan.angle_increment, RANGE_MIN, RANGE_MAX, scan.ranges)
+            writer.write(scan_topic, LASER_SCAN, _ns(stamp), laser_scan_message(scan, stamp, "laser"))
     return path
 
 

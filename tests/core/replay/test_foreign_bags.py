@@ -50,6 +50,12 @@ def test_a_gmapping_tutorial_bag_replays_as_the_package_own(drive, package_repla
     assert _same_trajectory(tmp_path / "out", package_replay) < 0.01
 
 
+def test_a_laser_mounted_upside_down_maps_the_right_way_round(drive, package_replay, tmp_path):
+    bag = write_foreign_bag(drive, tmp_path / "upside_down.bag", upside_down=True)
+    assert main(["replay", str(bag), "--slam", "--out", str(tmp_path / "out")]) == 0
+    assert _same_trajectory(tmp_path / "out", package_replay) < 0.01
+
+
 def test_topics_and_frames_are_options_with_gmappings_names(drive, package_replay, tmp_path):
     bag = write_foreign_bag(drive, tmp_path / "renamed.bag", scan_topic="/base_scan", odom_frame="odom_combined")
     out = tmp_path / "out"
