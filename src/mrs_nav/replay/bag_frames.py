@@ -51,6 +51,13 @@ class BagNames:
     odom_frame: str = field(default_factory=lambda: str(_slam_default("odom_frame")))
     map_frame: str = field(default_factory=lambda: str(_slam_default("map_frame")))
 
+    def __post_init__(self) -> None:
+        # As a live node resolves them: "scan" is /scan (a bag's topics are absolute), "/base_link" is tf1's base_link.
+        for name in ("scan_topic", "odom_topic"):
+            object.__setattr__(self, name, "/" + getattr(self, name).lstrip("/"))
+        for name in ("base_frame", "odom_frame", "map_frame"):
+            object.__setattr__(self, name, frame_name(getattr(self, name)))
+
 
 @dataclass(frozen=True)
 class BagFrames:

@@ -60,7 +60,8 @@ def test_topics_and_frames_are_options_with_gmappings_names(drive, package_repla
     bag = write_foreign_bag(drive, tmp_path / "renamed.bag", scan_topic="/base_scan", odom_frame="odom_combined")
     out = tmp_path / "out"
     golden = tmp_path / "renamed.golden.json"
-    options = ["--scan-topic", "/base_scan", "--odom-frame", "odom_combined", "--base-frame", "base_link"]
+    # as gmapping's parameters are often written: a relative topic, a tf1 frame name
+    options = ["--scan-topic", "base_scan", "--odom-frame", "odom_combined", "--base-frame", "/base_link"]
     assert main(["replay", str(bag), "--slam", *options, "--out", str(out), "--write-golden", str(golden)]) == 0
     assert _same_trajectory(out, package_replay) < 0.01
     recorded = json.loads(golden.read_text())["options"]
