@@ -52,6 +52,8 @@ _FLEET_MONITOR = (
 )
 _TLS = "tests/ros/test_zenoh_network.py::test_secured_bridge_as_the_robots_router"
 
+_PLAY_RECIPE = "tests/ros/test_recording.py::test_a_recording_plays_into_live_slam_the_standard_way"
+
 _ROS2 = "tests/ros/test_ros2_bridge.py::test_a_ros2_node_receives_odom_scan_map_and_tf"
 _ROS2_GOAL = "tests/ros/test_ros2_bridge.py::test_a_ros2_goal_pose_drives_the_robot_there"
 
@@ -240,6 +242,15 @@ COMMANDS: dict[str, Entry] = {
     "mrs-nav replay tests/data/bags/office.bag --slam --out office_map --json": Run(),
     "roslaunch mrs_nav record.launch bag:=$HOME/mrs_nav_session.bag": Covered(
         "tests/test_record_launch.py::test_record_launch_runs_debians_rosbag_record_on_those_topics"
+    ),
+    "roslaunch mrs_nav simulation.launch record:=true bag:=$HOME/mrs_nav_session.bag": Covered(
+        _PLAY_RECIPE, "with real_time_factor:=0, driving by /cmd_vel"
+    ),
+    "roslaunch mrs_nav slam.launch sim:=false": Covered(_PLAY_RECIPE, "with rviz:=false (no display)"),
+    "rosbag play --clock $HOME/mrs_nav_session.bag": Covered(_PLAY_RECIPE),
+    "mrs-nav replay robot.bag --slam --scan-topic /base_scan --base-frame base_link --out robot_map": Covered(
+        "tests/core/replay/test_foreign_bags.py::test_topics_and_frames_are_options_with_gmappings_names",
+        "a gmapping-tutorial bag with /base_scan, also with --odom-frame",
     ),
     "mrs-nav replay $HOME/mrs_nav_session.bag --slam --out my_map --json": Covered(
         "tests/ros/test_recording.py::test_closed_recording_replays", "a bag recorded by record.launch"

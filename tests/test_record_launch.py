@@ -7,7 +7,8 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from mrs_nav.bag.topics import LOCALISATION_TOPICS, RECORDED_TOPICS
+from mrs_nav.bag import topics as session_topics
+from mrs_nav.bag.topics import LOCALISATION_TOPICS, RECORDED_TOPICS, STACK_OUTPUTS
 from tests.rosharness import REPO
 
 LAUNCH = REPO / "launch"
@@ -46,13 +47,17 @@ def test_session_launch_files_include_recording_on_request():
         assert _args(path).get("record") == "false", name
 
 
-def test_demo_writer_records_the_same_topics():
+def test_recording_leaves_out_what_a_live_stack_publishes_itself():
+    """`rosbag play --clock` makes the clock, and the live SLAM, planner and localisation publish their own map,
+    path and poses: a recording holding them gave two clocks (time went back) and two maps."""
+    recorded = set(_args(LAUNCH / "record.launch")["topics"].split())
+    assert recorded.isdisjoint(STACK_OUTPUTS)
+    assert {"/clock", "/map", "/path", *LOCALISATION_TOPICS} <= set(STACK_OUTPUTS)
+    assert {"/scan", "/odom", "/tf", "/tf_static", "/ground_truth/odom", "/cmd_vel"} <= recorded
+
+
+def test_demo_writer_records_the_same_topics_and_its_stacks_outputs():
     session = pytest.importorskip("mrs_nav.bag.session", reason="the demo's bag writer is not on this branch")
-    # the demo runs SLAM, not the localisation: everything else
-    others = {t: m for t, m in RECORDED_TOPICS.items() if t not in LOCALISATION_TOPICS}
-    assert others == session.SESSION_TOPICS
-
-
-def test_a_navigation_session_on_a_saved_map_records_the_localisation():
-    assert set(LOCALISATION_TOPICS) == {"/amcl_pose", "/particlecloud"}
-    assert set(LOCALISATION_TOPICS) <= set(_args(LAUNCH / "record.launch")["topics"].split())
+    # the demo runs SLAM and the planner, not the localisation; their outputs are kept for the replay to compare
+    outputs = {session_topics.CLOCK, session_topics.MAP, session_topics.PATH}
+    assert {**RECORDED_TOPICS, **{t: STACK_OUTPUTS[t] for t in outputs}} == session.SESSION_TOPICS

@@ -1,9 +1,12 @@
-"""Recording a headless session (``mrs-nav demo``) as the bag a ROS recording of the same run would be.
+"""Recording a headless session (``mrs-nav demo``): what ``launch/record.launch`` records of the same run, and
+the outputs of its SLAM and planner for ``mrs-nav replay`` to compare with.
 
 Topics and frames are those of the live system (DESIGN.md): ``/scan`` (``base_scan``), ``/odom`` and tf
 ``odom -> base_footprint``, ``/ground_truth/odom`` (frame ``world``), tf ``map -> odom`` from SLAM,
-``/tf_static`` (``base_footprint -> base_link -> base_scan``), ``/clock``, ``/cmd_vel``, ``/map`` (latched),
-``/path`` and ``/move_base_simple/goal`` (frame ``map``). Bag time is sim time.
+``/tf_static`` (``base_footprint -> base_link -> base_scan``), ``/cmd_vel`` and ``/move_base_simple/goal``
+(frame ``map``); and the stack's outputs ``/clock``, ``/map`` (latched) and ``/path``, which a recording leaves
+out (:mod:`mrs_nav.bag.topics`): play such a bag into a live stack with ``slam.launch sim:=false play:=BAG``,
+which takes its sensor topics only. Bag time is sim time.
 """
 
 from __future__ import annotations

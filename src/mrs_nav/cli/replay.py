@@ -26,7 +26,7 @@ from mrs_nav.replay.batch import (
     run_jobs,
 )
 from mrs_nav.replay.golden import dump_json, make_golden
-from mrs_nav.replay.job_options import add_options, golden_job, job_from_args
+from mrs_nav.replay.job_options import add_options, golden_job, job_from_args, name_options
 from mrs_nav.slam.eval.consistency import BROKEN_FRACTION, DUPLICATED_LINE
 from mrs_nav.slam.eval.relations import load_relations
 from mrs_nav.textfiles import check_writable
@@ -37,7 +37,9 @@ def register(subparsers: Any) -> None:
         "replay",
         help="replay bags offline: SLAM, re-planning, comparison with the recording, golden metrics",
         description=(
-            "Replay a ROS 1 bag without a master. With --slam, run SLAM over its /scan and /odom and write the "
+            "Replay a ROS 1 bag without a master. With --slam, run SLAM over its /scan and /odom (or, without /odom, "
+            "the odometry on /tf; --scan-topic, --odom-topic and gmapping's frame names read other robots' bags, the "
+            "laser's mounting comes from the bag's tf) and write the "
             "map (map_server .yaml + .pgm), the trajectory (CSV), a PNG of map and trajectories and metrics.json "
             "to --out. ATE is computed after an SE(2) alignment, RPE over consecutive processed scans; the "
             "replayed map and poses are compared with the recorded /map and live SLAM pose (/tf map->odom). "
@@ -53,7 +55,7 @@ def register(subparsers: Any) -> None:
         ),
     )
     parser.add_argument(
-        "bags", type=Path, nargs="+", metavar="BAG", help="bag(s) with /scan and /odom, or folders of bags"
+        "bags", type=Path, nargs="+", metavar="BAG", help="bag(s) with /scan and /odom or /tf, or folders of bags"
     )
     add_options(parser)
     parser.add_argument(
@@ -105,7 +107,7 @@ def register(subparsers: Any) -> None:
 
 def _options(args: argparse.Namespace) -> list[str]:
     """The options that change the metrics, recorded in a golden file (to replay it the same way)."""
-    options = ["--slam", *(f"--param={p}" for p in args.param)]
+    options = ["--slam", *(f"--param={p}" for p in args.param), *name_options(args)]
     if args.plan:
         options += ["--plan", f"--plan-iterations={args.plan_iterations}", f"--seed={args.seed}"]
         options += ["--plan-first"] if args.plan_first else []

@@ -26,6 +26,7 @@ from typing import Any
 
 from mrs_nav.bag.salvage import readable_bag
 from mrs_nav.errors import InvalidInputError, MrsNavError
+from mrs_nav.replay.bag_frames import BagNames
 from mrs_nav.replay.golden import load_golden, regressions
 from mrs_nav.replay.session_replay import (
     PlanOptions,
@@ -51,6 +52,7 @@ class BagJob:
     params: tuple[str, ...] = ()
     plan: PlanOptions | None = None
     golden: Path | None = None
+    names: BagNames = field(default_factory=BagNames)  # the bag's topics and frames
     # Also the doubled-wall figure of the map the scans make at the bag's ground-truth poses (summary key
     # doubled_wall_fraction_at_truth; None without truth): what the scene itself puts on the broken-map line.
     reference: bool = False
@@ -127,7 +129,7 @@ def replay_bag(job: BagJob, progress: Callable[[int], None] | None = None) -> tu
     golden = load_golden(job.golden) if job.golden else None
     with tempfile.TemporaryDirectory(prefix="mrs_nav_replay_") as work:
         bag, note = readable_bag(job.bag, Path(work))
-        session = replay_session(bag, config, job.plan, progress)
+        session = replay_session(bag, config, job.plan, progress, job.names)
         result = session.slam
         if not result.estimate:
             skipped = _skipped(session)
@@ -172,7 +174,7 @@ def _doubled_at_truth(bag: Path, result: SlamReplay, config: SlamConfig) -> floa
 def _skipped(session: SessionReplay) -> list[str]:
     """What the SLAM replay left out of the bag, in words (nothing when it used every message)."""
     result = session.slam
-    notes = []
+    notes = [result.frames.note] if result.frames.note else []
     if result.scans_out_of_order or result.scans_rejected:
         first = f" (first: {result.first_rejection})" if result.first_rejection else ""
         notes.append(

@@ -7,11 +7,13 @@ the file recorded) and ``bench replay-batch``, so that a bench replays exactly w
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from pathlib import Path
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.limits import MAX_ITERATIONS, MAX_SEED
 from mrs_nav.options import count_option, seed_option
+from mrs_nav.replay.bag_frames import BagNames
 from mrs_nav.replay.batch import BagJob
 from mrs_nav.replay.golden import read_golden
 from mrs_nav.replay.session_replay import PlanOptions
@@ -38,6 +40,39 @@ def add_options(parser: argparse.ArgumentParser) -> None:
         metavar="NAME=VALUE",
         help="SLAM parameter with gmapping's name, e.g. --param maxUrange=30 --param linearUpdate=0 (repeatable)",
     )
+    defaults = dataclasses.asdict(BagNames())
+    for field, meaning in _NAME_OPTIONS.items():
+        default = defaults[field]
+        parser.add_argument(
+            f"--{field.replace('_', '-')}",
+            default=default,
+            metavar=field.split("_")[1].upper(),
+            help=f"{meaning} (default: {default})" if default else meaning,
+        )
+
+
+# BagNames field -> help, with gmapping's parameter name where it has one
+_NAME_OPTIONS = {
+    "scan_topic": "topic of the laser scans (gmapping's scan)",
+    "odom_topic": "nav_msgs/Odometry topic; without it in the bag, odometry comes from tf odom frame -> base frame",
+    "base_frame": (
+        "robot frame whose trajectory is mapped (gmapping's base_frame); by default the frame the odometry moves: "
+        "the odometry topic's child_frame_id, or the odom frame's child in tf"
+    ),
+    "odom_frame": "odometry frame (gmapping's odom_frame)",
+    "map_frame": "frame of the recorded map and map->odom correction (gmapping's map_frame)",
+}
+
+
+def names_from_args(args: argparse.Namespace) -> BagNames:
+    """The topics and frames ``args`` name."""
+    return BagNames(**{field: getattr(args, field) for field in _NAME_OPTIONS})
+
+
+def name_options(args: argparse.Namespace) -> list[str]:
+    """The topic and frame options of ``args`` that differ from the defaults (a golden file records them)."""
+    given, defaults = dataclasses.asdict(names_from_args(args)), dataclasses.asdict(BagNames())
+    return [f"--{key.replace('_', '-')}={value}" for key, value in given.items() if value != defaults[key]]
 
 
 def job_from_args(args: argparse.Namespace, bag: Path, out: Path, golden: Path | None) -> BagJob:
@@ -45,7 +80,7 @@ def job_from_args(args: argparse.Namespace, bag: Path, out: Path, golden: Path |
     if not (args.slam or args.plan):
         raise InvalidInputError(f"nothing to do: give --slam and/or --plan (for {bag})")
     plan = PlanOptions(args.plan_iterations, args.seed, args.plan_first) if args.plan else None
-    return BagJob(bag, out, tuple(args.param), plan, golden)
+    return BagJob(bag, out, tuple(args.param), plan, golden, names_from_args(args))
 
 
 def golden_job(bag: Path, out: Path, golden: Path) -> BagJob:

@@ -18,6 +18,7 @@ from mrs_nav.errors import BagError, InvalidInputError
 from mrs_nav.geometry import Pose2D, yaw_from_quaternion
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.planning import path_length
+from mrs_nav.replay.bag_frames import BagNames
 from mrs_nav.replay.pose_track import PoseTrack
 
 
@@ -65,10 +66,11 @@ def grid_from_message(message: Any) -> OccupancyGrid:
     )
 
 
-def read_recorded(bag: Path, map_frame: str = "map", odom_frame: str = "odom") -> RecordedSession:
+def read_recorded(bag: Path, names: BagNames) -> RecordedSession:
     """Read the recorded map (the last one), goals, plan lengths and live SLAM poses of ``bag``."""
     session = RecordedSession()
-    wanted = [topics.MAP, topics.GOAL, topics.PATH, topics.TF, topics.ODOM]
+    map_frame, odom_frame = names.map_frame, names.odom_frame
+    wanted = [topics.MAP, topics.GOAL, topics.PATH, topics.TF, names.odom_topic]
     for topic, _, msg in read_messages(bag, wanted):
         if topic == topics.MAP:
             try:
@@ -80,7 +82,7 @@ def read_recorded(bag: Path, map_frame: str = "map", odom_frame: str = "odom") -
         elif topic == topics.PATH:
             points = [[p.pose.position.x, p.pose.position.y] for p in msg.poses]
             session.paths.append((stamp_of(msg), path_length(np.asarray(points).reshape(-1, 2)) if points else 0.0))
-        elif topic == topics.ODOM:
+        elif topic == names.odom_topic:
             try:
                 session.odom.add(stamp_of(msg), pose_from_odometry(msg))
             except InvalidInputError:  # non-finite values: skipped, and noted by the SLAM replay of the same bag

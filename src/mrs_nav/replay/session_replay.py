@@ -27,6 +27,7 @@ from mrs_nav.bag.io import bag_topics
 from mrs_nav.errors import BagError
 from mrs_nav.geometry import Pose2D
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
+from mrs_nav.replay.bag_frames import BagNames
 from mrs_nav.replay.golden import dump_json
 from mrs_nav.replay.map_compare import compare_maps
 from mrs_nav.replay.plan_replay import GoalPlan, replan_goals
@@ -61,7 +62,7 @@ class SessionReplay:
 def check_types(bag: Path) -> None:
     """Raise :class:`BagError` when a session topic of ``bag`` has another type than a recording's."""
     for topic, msgtype in sorted(bag_topics(bag).items()):
-        expected = topics.RECORDED_TOPICS.get(topic)
+        expected = topics.SESSION_TYPES.get(topic)
         if expected is not None and msgtype != expected:
             raise BagError(f"bag {bag}: topic {topic} has type {msgtype}, expected {expected}")
 
@@ -77,10 +78,13 @@ def replay_session(
     config: SlamConfig,
     plan: PlanOptions | None = None,
     progress: Callable[[int], None] | None = None,
+    names: BagNames | None = None,
 ) -> SessionReplay:
-    """Replay ``bag`` (see the module docstring); plan only when ``plan`` is given."""
+    """Replay ``bag`` (see the module docstring) reading the topics and frames ``names`` gives (default:
+    mrs_nav's); plan only when ``plan`` is given."""
     check_types(bag)
-    session = SessionReplay(replay_slam(bag, config, progress), read_recorded(bag))
+    names = names or BagNames()
+    session = SessionReplay(replay_slam(bag, config, progress, names), read_recorded(bag, names))
     slam, recorded = session.slam, session.recorded
     poses = [p.pose for p in slam.slam.processed]  # after any correction since each scan was processed
     metrics: Metrics = {"scans_processed": len(poses)}

@@ -1,7 +1,9 @@
-"""Running SLAM over a bag's ``/scan`` and ``/odom`` offline, with metrics against ``/ground_truth/odom``.
+"""Running SLAM over a bag's scans and odometry offline, with metrics against ``/ground_truth/odom``.
 
-Each scan is paired with the odometry pose interpolated at its stamp (scans wait for the next odometry message
-rather than being dropped), and the laser's mounting is read from ``/tf_static`` (identity if absent).
+The topics and frames are found by :func:`mrs_nav.replay.bag_frames.resolve_frames`: scans on ``/scan`` (or
+another topic), odometry from ``/odom`` or, in a bag without it, from tf ``odom -> base frame``, the laser's
+mounting from the bag's transforms. Each scan is paired with the odometry pose interpolated at its stamp (scans
+wait for the next odometry message rather than being dropped).
 
 Pairing needs time to move on: a scan stamped at or before the previous scan, or an odometry message stamped at
 or before the previous one, cannot be told apart from its predecessor. Such messages are skipped and counted;
@@ -24,12 +26,14 @@ import numpy as np
 import numpy.typing as npt
 
 from mrs_nav.atomic_write import atomic_path, write_text
+from mrs_nav.bag import topics
 from mrs_nav.bag.io import read_messages
-from mrs_nav.bag.messages import pose_from_odometry, scan_from_message, stamp_of
+from mrs_nav.bag.messages import pose_from_odometry, stamp_of
 from mrs_nav.errors import BagError, InvalidInputError, MrsNavError
-from mrs_nav.geometry import Pose2D, yaw_from_quaternion
+from mrs_nav.geometry import Pose2D
 from mrs_nav.maps.map_io import save_map
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
+from mrs_nav.replay.bag_frames import BagFrames, BagNames, frame_name, resolve_frames, transform_pose
 from mrs_nav.replay.pose_track import PoseTrack
 from mrs_nav.slam.config import MAX_COORDINATE_M, SlamConfig
 from mrs_nav.slam.eval.consistency import (
@@ -43,9 +47,8 @@ from mrs_nav.slam.eval.relations import Relation, bridged, choose_offset, relati
 from mrs_nav.slam.scan import BeamSplit, split_beams
 from mrs_nav.slam.slam import Slam
 
-SCAN_TOPIC = "/scan"
-ODOM_TOPIC = "/odom"
-TRUTH_TOPIC = "/ground_truth/odom"
+TRUTH_TOPIC = topics.GROUND_TRUTH
+TF_TOPIC = topics.TF
 MAX_UNPAIRED_FRACTION = 0.1
 MIN_TRUTH_FRACTION = 0.9
 PLOT_MAX_PIXELS = 1600  # map cells a side in slam_map.png; the 8-inch figure at 100 dpi shows about 700
@@ -56,6 +59,7 @@ class SlamReplay:
     """What a replay produced: the SLAM state, the processed poses and the timing (CPU ms per processed scan)."""
 
     slam: Slam
+    frames: BagFrames
     stamps: list[float] = field(default_factory=list)
     estimate: list[Pose2D] = field(default_factory=list)
     odometry: list[Pose2D] = field(default_factory=list)
@@ -147,58 +151,41 @@ class SlamReplay:
         }
 
 
-def laser_mounting(bag: Path, base_frame: str = "base_footprint") -> Pose2D:
-    """Pose of the first laser frame found under ``base_frame`` in ``/tf_static`` (identity if none)."""
-    parents: dict[str, tuple[str, Pose2D]] = {}
-    for _, _, msg in read_messages(bag, ["/tf_static"]):
-        for tf in msg.transforms:
-            t, q = tf.transform.translation, tf.transform.rotation
-            pose = Pose2D(float(t.x), float(t.y), yaw_from_quaternion(q.x, q.y, q.z, q.w))
-            parents[tf.child_frame_id] = (tf.header.frame_id, pose)
-    for frame in ("base_scan", "base_laser", "laser"):
-        chain = Pose2D(0.0, 0.0, 0.0)
-        current = frame
-        while current in parents and current != base_frame:
-            parent, pose = parents[current]
-            chain = pose.compose(chain)
-            current = parent
-        if current == base_frame and frame in parents:
-            return chain
-    return Pose2D(0.0, 0.0, 0.0)
-
-
-def replay_slam(bag: Path, config: SlamConfig, progress: Callable[[int], None] | None = None) -> SlamReplay:
-    """Run SLAM over ``bag`` (needs ``/scan`` and ``/odom``; uses ``/ground_truth/odom`` if present)."""
-    result = SlamReplay(Slam(config, laser_mounting(bag)))
+def replay_slam(
+    bag: Path,
+    config: SlamConfig,
+    progress: Callable[[int], None] | None = None,
+    names: BagNames | None = None,
+) -> SlamReplay:
+    """Run SLAM over ``bag``'s scans and odometry (``names``: which topics and frames; default: mrs_nav's); uses
+    ``/ground_truth/odom`` if present."""
+    frames = resolve_frames(bag, names or BagNames())
+    result = SlamReplay(Slam(config, frames.mounting), frames)
     odom, truth = result.odom_track, PoseTrack()
     pending: deque[tuple[float, Any]] = deque()
     first_stamp = last_stamp = math.nan
     start, wall_start = time.process_time(), time.perf_counter()
-    topics = [SCAN_TOPIC, ODOM_TOPIC, TRUTH_TOPIC]
-    for topic, _, msg in read_messages(bag, topics, required=[SCAN_TOPIC, ODOM_TOPIC]):
-        stamp = stamp_of(msg)
-        if math.isnan(first_stamp):
-            first_stamp = stamp
-        last_stamp = stamp
-        if topic == SCAN_TOPIC:
+    scan_topic, odometry_topic = frames.names.scan_topic, frames.odometry_topic or TF_TOPIC
+    for topic, _, msg in read_messages(bag, [scan_topic, odometry_topic, TRUTH_TOPIC]):
+        if topic == scan_topic:
+            readings = [(stamp_of(msg), msg)]
             result.scans_read += 1
-            pending.append((stamp, msg))
+            pending.append(readings[0])
             if progress is not None:
                 progress(1)
-        elif topic == ODOM_TOPIC:
-            result.odom_read += 1
-            pose = _pose_or_none(msg, stamp, topic, result)
-            if pose is None:
-                continue  # nothing new to pair scans with
-            if stamp <= odom.latest:
-                result.odom_out_of_order += 1
-            elif max(abs(pose.x), abs(pose.y)) > MAX_COORDINATE_M:
-                # One wild reading must not be interpolated into its neighbours' scans: drop it.
-                result.odom_rejected += 1
-            else:
-                odom.add(stamp, pose)
-        elif (pose := _pose_or_none(msg, stamp, topic, result)) is not None:
-            truth.add(stamp, pose)
+        elif topic == odometry_topic:
+            readings = _odometry(msg, frames)
+            for stamp, reading in readings:
+                result.odom_read += 1
+                if (pose := _pose_or_none(reading, stamp, topic, result)) is not None:
+                    _add_odometry(result, stamp, pose)
+        else:
+            readings = [(stamp_of(msg), msg)]
+            if (pose := _pose_or_none(msg, readings[0][0], topic, result)) is not None:
+                truth.add(readings[0][0], pose)
+        if readings:
+            first_stamp = readings[0][0] if math.isnan(first_stamp) else first_stamp
+            last_stamp = readings[-1][0]
         # A scan is processed once odometry reaches its stamp; earlier scans never wait on later ones.
         while pending and odom.latest >= pending[0][0]:
             _process(result, *pending.popleft(), odom, truth)
@@ -216,6 +203,32 @@ def replay_slam(bag: Path, config: SlamConfig, progress: Callable[[int], None] |
     return result
 
 
+def _odometry(msg: Any, frames: BagFrames) -> list[tuple[float, Any]]:
+    """(stamp, reading) of the odometry in a message: a ``nav_msgs/Odometry``, or the ``odom -> base`` transforms
+    of a ``tf2_msgs/TFMessage`` (none when it holds other edges only)."""
+    if frames.odometry_topic is not None:
+        return [(stamp_of(msg), msg)]
+    parent, child = frames.names.odom_frame, frames.odom_child
+    return [
+        (stamp_of(tf), tf)
+        for tf in msg.transforms
+        if frame_name(tf.child_frame_id) == child and frame_name(tf.header.frame_id) == parent
+    ]
+
+
+def _add_odometry(result: SlamReplay, stamp: float, pose: Pose2D) -> None:
+    """Take an odometry pose of the frame the odometry moves, as the base frame's pose."""
+    if result.frames.base_in_odom_child is not None:
+        pose = pose.compose(result.frames.base_in_odom_child)
+    if stamp <= result.odom_track.latest:
+        result.odom_out_of_order += 1
+    elif max(abs(pose.x), abs(pose.y)) > MAX_COORDINATE_M:
+        # One wild reading must not be interpolated into its neighbours' scans: drop it.
+        result.odom_rejected += 1
+    else:
+        result.odom_track.add(stamp, pose)
+
+
 def truth_scans(bag: Path, result: SlamReplay) -> Callable[[], Iterator[tuple[Pose2D, BeamSplit]]] | None:
     """The scans ``result`` processed, read from ``bag`` again, each at its ground-truth laser pose and with its
     beams split as the SLAM split them (for :func:`mrs_nav.slam.eval.consistency.doubled_wall_fraction_at`); None
@@ -227,10 +240,10 @@ def truth_scans(bag: Path, result: SlamReplay) -> Callable[[], Iterator[tuple[Po
 
     def scans() -> Iterator[tuple[Pose2D, BeamSplit]]:
         left = dict(truth)  # a later scan with a processed one's stamp was skipped as out of order
-        for _, _, msg in read_messages(bag, [SCAN_TOPIC]):
+        for _, _, msg in read_messages(bag, [result.frames.names.scan_topic]):
             pose = left.pop(stamp_of(msg), None)
             if pose is not None:
-                scan = scan_from_message(msg)
+                scan = result.frames.scan(msg)
                 usable = slam.config.usable_range(scan.range_max)
                 yield pose.compose(slam.laser_pose), split_beams(scan, usable, slam.config.maxRange)
 
@@ -241,7 +254,7 @@ def _pose_or_none(msg: Any, stamp: float, topic: str, result: SlamReplay) -> Pos
     """The pose of an odometry message, or None (counted, the first reason kept) when its values are not finite:
     one bad message is skipped, not the replay."""
     try:
-        return pose_from_odometry(msg)
+        return pose_from_odometry(msg) if hasattr(msg, "pose") else transform_pose(msg)
     except InvalidInputError as err:
         result.poses_invalid += 1
         result.first_invalid_pose = result.first_invalid_pose or f"{topic} at {stamp:.3f} s: {err}"
@@ -265,15 +278,16 @@ def _process(result: SlamReplay, stamp: float, msg: Any, odom: PoseTrack, truth:
         result.scans_out_of_order += 1
         return
     result.last_scan_stamp = stamp
+    where = f"scan on {result.frames.names.scan_topic} (frame '{result.frames.laser_frame}') at {stamp:.3f} s"
     pose = odom.at(stamp)
     if pose is None:
-        result.reject(f"scan at {stamp:.3f} s: no odometry within {odom.tolerance} s")
+        result.reject(f"{where}: no odometry within {odom.tolerance} s")
         return
     t0 = time.process_time()
     try:
-        done = result.slam.add_scan(pose, scan_from_message(msg), stamp)
+        done = result.slam.add_scan(pose, result.frames.scan(msg), stamp)
     except MrsNavError as err:
-        result.reject(f"scan at {stamp:.3f} s: {err}")
+        result.reject(f"{where}: {err}")
         return
     if done is None:
         return

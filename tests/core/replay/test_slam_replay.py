@@ -10,7 +10,8 @@ from mrs_nav.bag.io import BagWriter
 from mrs_nav.bag.messages import LASER_SCAN, ODOMETRY, laser_scan_message, odometry_message, tf_message
 from mrs_nav.cli.main import main
 from mrs_nav.geometry import Pose2D
-from mrs_nav.replay.slam_replay import laser_mounting, replay_slam
+from mrs_nav.replay.bag_frames import BagNames, resolve_frames
+from mrs_nav.replay.slam_replay import replay_slam
 from mrs_nav.slam import SlamConfig
 from tests.core.slam.synthetic import cast
 
@@ -44,7 +45,7 @@ def write_bag(path, with_truth, truth_from=0):
 def test_mounting_comes_from_tf_static(tmp_path):
     bag = tmp_path / "a.bag"
     write_bag(bag, with_truth=True)
-    mount = laser_mounting(bag)
+    mount = resolve_frames(bag, BagNames()).mounting
     assert (mount.x, mount.y, mount.yaw) == pytest.approx((MOUNT.x, MOUNT.y, MOUNT.yaw))
 
 

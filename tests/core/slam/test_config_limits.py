@@ -114,7 +114,8 @@ def test_bag_with_bad_angles_and_far_odometry_replays_with_a_note(tmp_path, caps
     assert summary["scans"] == 38
     assert summary["ate_rmse_m"] < 0.02
     note = captured.err.strip().splitlines()
-    assert len(note) == 2
+    assert len(note) == 3
+    assert note.pop(0).endswith("has no tf: the laser (frame 'base_scan') is taken at the origin of 'base_footprint'")
     assert note[0].startswith("NOTE: skipped 0 scans stamped at or before the previous scan and 2 scans")
     assert "angle_max must be finite" in note[0]
     assert note[1] == "NOTE: skipped 2 of 40 odometry messages farther than 100000 m from the origin"
