@@ -54,6 +54,7 @@ _TLS = "tests/ros/test_zenoh_network.py::test_secured_bridge_as_the_robots_route
 
 _ROS2 = "tests/ros/test_ros2_bridge.py::test_a_ros2_node_receives_odom_scan_map_and_tf"
 _ROS2_GOAL = "tests/ros/test_ros2_bridge.py::test_a_ros2_goal_pose_drives_the_robot_there"
+_ROS2_ACTION = "tests/ros/test_ros2_bridge.py::test_a_navigate_to_pose_goal_is_reached_with_feedback"
 
 COMMANDS: dict[str, Entry] = {
     # README.md
@@ -78,6 +79,9 @@ COMMANDS: dict[str, Entry] = {
     "roslaunch mrs_nav ros2_bridge.launch": Covered(_ROS2, "on a domain of the test's own"),
     "roslaunch mrs_nav ros2_bridge.launch domain_id:=7 allow_inbound:=[/goal_pose]": Covered(
         _ROS2_GOAL, "on a domain of the test's own"
+    ),
+    "roslaunch mrs_nav ros2_bridge.launch domain_id:=7 allow_inbound:=[/navigate_to_pose]": Covered(
+        _ROS2_ACTION, "on a domain of the test's own"
     ),
     "roslaunch mrs_nav ros2_bridge.launch domain_id:=7 allow_inbound:=[/goal_pose,/initialpose]": Covered(
         _ROS2_GOAL, "on a domain of the test's own, with /goal_pose allowed"
