@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import io
 import threading
+import time
 from collections.abc import Callable
 
 import actionlib
@@ -22,6 +23,9 @@ from mrs_nav.bridge.ros2_action import ACTION_CHANNEL, ActionFrame, FeedbackTrac
 from mrs_nav.errors import InvalidInputError
 
 POSE_TYPE = "geometry_msgs/PoseStamped"
+# Wall seconds a goal waits for the move_base server to be connected (goal, cancel, feedback and result topics)
+# before it is refused: right after start-up the connections may still be under way.
+SERVER_WAIT = 10.0
 
 
 def _serialized(msg: PoseStamped) -> bytes:
@@ -49,16 +53,19 @@ class MoveBaseForwarder:
         self._send = send
         self._lock = threading.Lock()
         self._goals: dict[bytes, tuple[actionlib.ClientGoalHandle, FeedbackTracker]] = {}
+        self._cancelled: set[bytes] = set()  # cancelled before they were sent on
 
     def deliver(self, payload: bytes) -> None:
         """A frame from the ROS 2 half on the action's channel; InvalidInputError if it is not one it sends."""
         frame = ActionFrame.decode(payload)
-        if frame.kind is Kind.GOAL:
-            self._start(frame.goal_id, frame.body)
+        if frame.kind is Kind.GOAL:  # in a thread: it may wait for move_base, the pipe's reader must not
+            threading.Thread(target=self._start, args=(frame.goal_id, frame.body), daemon=True).start()
         elif frame.kind is Kind.CANCEL:
             with self._lock:
                 entry = self._goals.get(frame.goal_id)
-            if entry is not None:  # else it has ended already: its result is on its way
+                if entry is None:  # not sent on yet, or ended already (its result is on its way)
+                    self._cancelled.add(frame.goal_id)
+            if entry is not None:
                 entry[0].cancel()
         else:
             raise InvalidInputError(f"action frame {frame.kind.name} from the ROS 2 half")
@@ -69,18 +76,31 @@ class MoveBaseForwarder:
         except Exception as err:  # anything from the other side may be broken: refuse the goal, go on
             self._result(goal_id, GoalStatus.REJECTED, f"goal refused by ros2_bridge: {err}")
             return
-        if self._client.pub_goal.get_num_connections() == 0:
+        if not self._server_ready():
             self._result(goal_id, GoalStatus.REJECTED, f"no action server on {self._action_ns}")
             return
         tracker = FeedbackTracker(pose.pose.position.x, pose.pose.position.y, rospy.get_time())
-        rospy.loginfo("ros2 bridge: NavigateToPose goal %s sent to %s", goal_name(goal_id), self._action_ns)
         with self._lock:  # the callbacks (rospy's threads) find the goal once it is sent
+            if goal_id in self._cancelled:
+                self._cancelled.discard(goal_id)
+                self._result(goal_id, GoalStatus.RECALLED, "cancelled before it was sent")
+                return
+            rospy.loginfo("ros2 bridge: NavigateToPose goal %s sent to %s", goal_name(goal_id), self._action_ns)
             handle = self._client.send_goal(
                 MoveBaseGoal(target_pose=pose),
                 transition_cb=lambda h: self._on_transition(goal_id, h),
                 feedback_cb=lambda _h, feedback: self._on_feedback(goal_id, feedback),
             )
             self._goals[goal_id] = (handle, tracker)
+
+    def _server_ready(self) -> bool:
+        """Whether move_base is connected, waiting up to SERVER_WAIT wall seconds (actionlib's own wait counts
+        in sim time, which runs many times faster than the connections are made at maximum rate)."""
+        deadline = time.monotonic() + SERVER_WAIT
+        while time.monotonic() < deadline and not rospy.is_shutdown():
+            if self._client.wait_for_server(rospy.Duration(0.001)):
+                return True
+        return False
 
     def _on_transition(self, goal_id: bytes, handle: actionlib.ClientGoalHandle) -> None:
         if handle.get_comm_state() != actionlib.CommState.DONE:
