@@ -56,6 +56,10 @@ _PLAY_RECIPE = "tests/ros/test_recording.py::test_a_recording_plays_into_live_sl
 
 _ROS2 = "tests/ros/test_ros2_bridge.py::test_a_ros2_node_receives_odom_scan_map_and_tf"
 _ROS2_GOAL = "tests/ros/test_ros2_bridge.py::test_a_ros2_goal_pose_drives_the_robot_there"
+_ROS2_ACTION = "tests/ros/test_ros2_bridge.py::test_a_navigate_to_pose_goal_is_reached_with_feedback"
+_ROS2_ROBOTS = (
+    "tests/ros/test_ros2_multi_robot.py::test_each_robot_is_under_its_namespace_on_ros2_and_takes_its_own_goal"
+)
 
 COMMANDS: dict[str, Entry] = {
     # README.md
@@ -81,12 +85,16 @@ COMMANDS: dict[str, Entry] = {
     "roslaunch mrs_nav ros2_bridge.launch domain_id:=7 allow_inbound:=[/goal_pose]": Covered(
         _ROS2_GOAL, "on a domain of the test's own"
     ),
+    "roslaunch mrs_nav multi_robot.launch robots:=2 ros2:=true ros2_domain_id:=7 "
+    "ros2_allow_inbound:=[/navigate_to_pose]": Covered(_ROS2_ROBOTS, "on a domain of the test's own, at max rate"),
+    "roslaunch mrs_nav ros2_bridge.launch domain_id:=7 allow_inbound:=[/navigate_to_pose]": Covered(
+        _ROS2_ACTION, "on a domain of the test's own"
+    ),
     "roslaunch mrs_nav ros2_bridge.launch domain_id:=7 allow_inbound:=[/goal_pose,/initialpose]": Covered(
         _ROS2_GOAL, "on a domain of the test's own, with /goal_pose allowed"
     ),
-    "roslaunch mrs_nav ros2_bridge.launch namespace:=tb3_0 node_name:=ros2_bridge_tb3_0 domain_id:=7": Manual(
-        "multi_robot.launch with a bridge per robot is not run here; the namespace rules are unit-tested in "
-        "tests/core/bridge/test_ros2_link.py"
+    "roslaunch mrs_nav ros2_bridge.launch namespace:=tb3_0 node_name:=ros2_bridge_tb3_0 domain_id:=7": Covered(
+        _ROS2_ROBOTS, "multi_robot.launch ros2:=true starts it so in each robot's namespace"
     ),
     # docs/ros.md
     "cd ~/catkin_ws && catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 && source devel/setup.bash": Manual(

@@ -9,6 +9,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import random
 import subprocess
 import sys
 import threading
@@ -30,6 +31,12 @@ needs_ros2 = pytest.mark.skipif(
 def free_domain() -> int:
     """A ROS_DOMAIN_ID for one test: from a free port, so two runs on one machine are unlikely to share it."""
     return 1 + free_port() % 100
+
+
+def high_domain() -> int:
+    """A ROS_DOMAIN_ID at random from 201..232, above those of :func:`free_domain` and ``mrs-nav bench ros2``
+    (1..200): a test's own, away from the others'."""
+    return random.SystemRandom().randint(201, 232)
 
 
 def ros2_env(domain: int) -> dict[str, str]:

@@ -3,7 +3,11 @@
 ``python ros2_peer.py NAMESPACE``: subscribes to the bridge's ROS 2 topics with the QoS a ROS 2 user would
 pick and prints one JSON line per topic on its first message and then at most every 0.5 s (``{"topic", "count",
 ...}``); reads commands from stdin: ``goal X Y`` publishes a geometry_msgs/PoseStamped (frame map) on
-``goal_pose``. ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE come from the environment.
+``goal_pose``; ``navigate NAME X Y`` sends a nav2_msgs NavigateToPose goal on ``navigate_to_pose`` and prints
+``{"action": NAME, ...}`` lines: ``accepted``, ``feedback`` (at most every 0.5 s, with the count), ``status`` and
+the result's ``error_code``/``error_msg`` at the end; ``cancel NAME`` asks to cancel it (``cancel_goals``: how many
+the server took). ``server`` prints whether the action server is there. ROS_DOMAIN_ID and
+ROS_AUTOMATIC_DISCOVERY_RANGE come from the environment.
 """
 
 import json
@@ -13,7 +17,9 @@ import time
 
 import rclpy
 from geometry_msgs.msg import PoseStamped
+from nav2_msgs.action import NavigateToPose
 from nav_msgs.msg import OccupancyGrid, Odometry
+from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
@@ -72,6 +78,17 @@ class Peer(Node):
         for name, cls, qos in topics:
             self.create_subscription(cls, name, lambda m, n=name: self.heard(n, m), qos)
         self.goal_pub = self.create_publisher(PoseStamped, "goal_pose", RELIABLE)
+        self.navigator = ActionClient(self, NavigateToPose, "navigate_to_pose")
+        self.goals = {}
+        self.feedbacks = {}
+
+    def pose(self, x, y):
+        msg = PoseStamped()
+        msg.header.frame_id = "map"
+        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.pose.position.x, msg.pose.position.y = x, y
+        msg.pose.orientation.w = 1.0
+        return msg
 
     def heard(self, topic, msg):
         now = time.monotonic()
@@ -86,13 +103,61 @@ class Peer(Node):
         emit(line)
 
     def goal(self, x, y):
-        msg = PoseStamped()
-        msg.header.frame_id = "map"
-        msg.header.stamp = self.get_clock().now().to_msg()
-        msg.pose.position.x, msg.pose.position.y = x, y
-        msg.pose.orientation.w = 1.0
-        self.goal_pub.publish(msg)
+        self.goal_pub.publish(self.pose(x, y))
         emit({"sent": "goal", "subscribers": self.goal_pub.get_subscription_count()})
+
+    def navigate(self, name, x, y):
+        printed = [-1.0]
+
+        def on_feedback(msg):
+            fb = msg.feedback
+            self.feedbacks[name] = self.feedbacks.get(name, 0) + 1
+            now = time.monotonic()
+            if now - printed[0] < 0.5:
+                return
+            printed[0] = now
+            p = fb.current_pose.pose.position
+            emit(
+                {
+                    "action": name,
+                    "feedback": self.feedbacks[name],
+                    "x": p.x,
+                    "y": p.y,
+                    "frame": fb.current_pose.header.frame_id,
+                    "distance": fb.distance_remaining,
+                    "navigation_time": fb.navigation_time.sec + fb.navigation_time.nanosec * 1e-9,
+                    "eta": fb.estimated_time_remaining.sec + fb.estimated_time_remaining.nanosec * 1e-9,
+                    "recoveries": fb.number_of_recoveries,
+                }
+            )
+
+        def on_result(future):
+            response = future.result()
+            emit(
+                {
+                    "action": name,
+                    "status": response.status,
+                    "error_code": response.result.error_code,
+                    "error_msg": response.result.error_msg,
+                    "feedbacks": self.feedbacks.get(name, 0),
+                }
+            )
+
+        def on_goal(future):
+            handle = future.result()
+            self.goals[name] = handle
+            emit({"action": name, "accepted": handle.accepted})
+            if handle.accepted:
+                handle.get_result_async().add_done_callback(on_result)
+
+        goal = NavigateToPose.Goal(pose=self.pose(x, y))
+        self.navigator.send_goal_async(goal, feedback_callback=on_feedback).add_done_callback(on_goal)
+
+    def cancel(self, name):
+        def on_cancel(future):
+            emit({"action": name, "cancel_goals": len(future.result().goals_canceling)})
+
+        self.goals[name].cancel_goal_async().add_done_callback(on_cancel)
 
 
 def main():
@@ -113,6 +178,12 @@ def main():
         words = line.split()
         if words[:1] == ["goal"]:
             peer.goal(float(words[1]), float(words[2]))
+        elif words[:1] == ["navigate"]:
+            peer.navigate(words[1], float(words[2]), float(words[3]))
+        elif words[:1] == ["cancel"]:
+            peer.cancel(words[1])
+        elif words[:1] == ["server"]:
+            emit({"server": peer.navigator.server_is_ready()})
     stop.set()  # in this order: tearing rclpy down under a spinning executor raises or aborts
     spinner.join()
     executor.shutdown()

@@ -2,7 +2,8 @@
 
 The simulation runs at maximum rate with rrt_navigation on a known map (published once, latched, by this process
 before the ROS 2 peer exists: the peer's copy arrives by transient_local, a late join); one bridge accepts
-/goal_pose, a second one on another domain accepts nothing."""
+/goal_pose, a second one on another domain accepts nothing, a third on a domain of its own serves Nav2's
+NavigateToPose action (and takes nothing else)."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ from typing import Any
 import pytest
 
 from tests.ros.navharness import IdentityCorrection, TruthTrack, world_map_msg
-from tests.ros.ros2_harness import Ros2Peer, free_domain, needs_ros2
+from tests.ros.ros2_harness import Ros2Peer, free_domain, high_domain, needs_ros2
 from tests.rosharness import RosMaster, wait_for
 
 pytestmark = [pytest.mark.ros, needs_ros2]
@@ -33,6 +34,7 @@ def bridged(
     open_domain, closed_domain = free_domain(), free_domain()
     while closed_domain == open_domain:
         closed_domain = free_domain()
+    action_domain = high_domain()
     with (
         ros_master.launch("simulation.launch", *MAX_RATE, "x:=-1.5", "y:=-1.5", "yaw:=0") as sim,
         ros_master.launch("rrt_navigation.launch", "slam:=false", "seed:=3", "rviz:=false") as nav,
@@ -40,6 +42,13 @@ def bridged(
         ros_master.launch(
             "ros2_bridge.launch", f"domain_id:={closed_domain}", "node_name:=ros2_bridge_closed", name="closed"
         ) as b2,
+        ros_master.launch(
+            "ros2_bridge.launch",
+            f"domain_id:={action_domain}",
+            "allow_inbound:=[/navigate_to_pose]",
+            "node_name:=ros2_bridge_action",
+            name="action",
+        ) as b3,
     ):
         truth = TruthTrack(rospy, "simple.world")
         correction = IdentityCorrection(rospy)
@@ -50,11 +59,12 @@ def bridged(
             map_pub.publish(grid)
             wait_for(lambda: truth.last() is not None, 60.0, "ground truth from the simulator")
             # the bridges have the map before the peers exist: the peers get it by joining late
-            wait_for(lambda: map_pub.get_num_connections() >= 3, 60.0, "navigation and both bridges on /map")
+            wait_for(lambda: map_pub.get_num_connections() >= 4, 60.0, "navigation and the bridges on /map")
             time.sleep(1.0)
-            peers += [Ros2Peer(open_domain, logs / "peer.log"), Ros2Peer(closed_domain, logs / "closed_peer.log")]
-            yield {"rospy": rospy, "truth": truth, "peer": peers[0], "closed": peers[1], "grid": grid,
-                   "procs": (sim, nav, b1, b2)}  # fmt: skip
+            peers += [Ros2Peer(open_domain, logs / "peer.log"), Ros2Peer(closed_domain, logs / "closed_peer.log"),
+                      Ros2Peer(action_domain, logs / "action_peer.log")]  # fmt: skip
+            yield {"rospy": rospy, "truth": truth, "peer": peers[0], "closed": peers[1], "action": peers[2],
+                   "grid": grid, "procs": (sim, nav, b1, b2, b3)}  # fmt: skip
         finally:
             for peer in peers:
                 peer.close()
@@ -152,3 +162,68 @@ def test_a_ros2_goal_pose_drives_the_robot_there(bridged: dict[str, Any]) -> Non
         return last is not None and math.hypot(last[1] - 1.5, last[2] - 1.5) < 0.25
 
     wait_for(there, 120.0, "the robot at (1.5, 1.5) in ground truth")
+
+
+# action_msgs/GoalStatus
+STATUS_SUCCEEDED, STATUS_CANCELED = 4, 5
+
+
+def _action_lines(peer: Ros2Peer, name: str, key: str) -> list[dict[str, Any]]:
+    return [line for line in list(peer.lines) if line.get("action") == name and key in line]
+
+
+def _server_ready(peer: Ros2Peer) -> bool:
+    peer.send("server")
+    time.sleep(0.2)
+    return any(line.get("server") for line in list(peer.lines))
+
+
+def test_a_navigate_to_pose_goal_is_reached_with_feedback(bridged: dict[str, Any]) -> None:
+    nav, truth = bridged["action"], bridged["truth"]
+    wait_for(lambda: _server_ready(nav), 60.0, "the bridge's navigate_to_pose action server")
+    goal = (-1.0, 1.5)
+    nav.send(f"navigate first {goal[0]} {goal[1]}")
+    wait_for(lambda: _action_lines(nav, "first", "status"), 180.0, "the NavigateToPose result")
+    end = truth.last()
+    (result,) = _action_lines(nav, "first", "status")
+    assert (result["status"], result["error_code"], result["error_msg"]) == (STATUS_SUCCEEDED, 0, "")
+    assert math.hypot(end[1] - goal[0], end[2] - goal[1]) < 0.25  # ground truth, not the robot's belief
+    feedback = _action_lines(nav, "first", "feedback")
+    assert result["feedbacks"] > 10
+    assert len(feedback) >= 2
+    assert {line["frame"] for line in feedback} == {"map"}
+    assert feedback[-1]["distance"] < feedback[0]["distance"]
+    assert feedback[-1]["navigation_time"] > feedback[0]["navigation_time"] > 0.0
+    assert any(line["eta"] > 0.0 for line in feedback)  # the robot was seen moving
+
+
+def test_a_navigate_to_pose_goal_is_cancelled_on_both_sides(bridged: dict[str, Any]) -> None:
+    rospy, nav, truth = bridged["rospy"], bridged["action"], bridged["truth"]
+    from move_base_msgs.msg import MoveBaseActionResult
+
+    ros1_results: list[Any] = []
+    sub = rospy.Subscriber("/move_base/result", MoveBaseActionResult, ros1_results.append)
+    try:
+        wait_for(lambda: _server_ready(nav), 60.0, "the bridge's navigate_to_pose action server")
+        goal = (1.5, -1.5)
+        nav.send(f"navigate second {goal[0]} {goal[1]}")
+
+        def moving() -> bool:
+            lines = _action_lines(nav, "second", "feedback")
+            return len(lines) >= 2 and lines[-1]["distance"] < lines[0]["distance"] - 0.3
+
+        wait_for(moving, 120.0, "feedback of the robot on its way")
+        nav.send("cancel second")
+        wait_for(lambda: _action_lines(nav, "second", "status"), 60.0, "the cancelled goal's result")
+        (result,) = _action_lines(nav, "second", "status")
+        assert result["status"] == STATUS_CANCELED
+        assert [line["cancel_goals"] for line in _action_lines(nav, "second", "cancel_goals")] == [1]
+        # move_base on ROS 1 was told: its goal ended PREEMPTED (actionlib_msgs/GoalStatus 2)
+        wait_for(lambda: any(r.status.status == 2 for r in ros1_results), 10.0, "move_base's PREEMPTED result")
+        stopped = truth.last()
+        time.sleep(2.0)  # at maximum rate: many seconds of sim time
+        end = truth.last()
+        assert math.hypot(end[1] - stopped[1], end[2] - stopped[2]) < 0.05  # it stopped
+        assert math.hypot(end[1] - goal[0], end[2] - goal[1]) > 0.5  # short of the goal
+    finally:
+        sub.unregister()

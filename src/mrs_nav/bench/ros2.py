@@ -7,6 +7,11 @@ domain; at the same time, on a second domain, an rclpy publisher and subscriber 
 and QoS (the floor: what ROS 2 itself costs on this machine under the same load). Latency is the subscriber's
 receive time minus the message's stamp, the publisher's wall-clock send time (one machine, one clock). CPU is
 the user + system time of both halves of the bridge over the run; RSS their sum, sampled every second.
+
+Then ``--goal-runs`` pairs of the same goal (the course arena, as ``bench navigation``'s ROS runs: same seed,
+same start, rrt_navigation.launch at max rate in lockstep, a ros2_bridge running beside it both times), once sent
+over ROS 1 and once as a NavigateToPose goal from an rclpy client through the bridge; both timed in sim time on
+ROS 1 from the goal's arrival to the navigation's outcome.
 """
 
 from __future__ import annotations
@@ -25,20 +30,29 @@ from typing import Any
 import numpy as np
 
 from mrs_nav.bench.bridge import cpu_seconds, rss_mb
+from mrs_nav.bench.navigation import SCENARIOS
 from mrs_nav.bridge.ros2_link import Ros2BridgeConfig, child_environment, package_root, ros2_python
 from mrs_nav.errors import MrsNavError
-from mrs_nav.options import duration_option
-from mrs_nav.resources import CHECKOUT
-from mrs_nav.ros_processes import RosProcessError, free_port, process, roscore, stop
+from mrs_nav.options import duration_option, optional_runs_option
+from mrs_nav.resources import CHECKOUT, WORLDS_DIR
+from mrs_nav.ros_processes import RosProcessError, free_port, process, roscore, roslaunch_command, run_peer, stop
 from mrs_nav.tables import markdown_table
 
 RATES = {"/odom": 50.0, "/scan": 5.0, "/map": 1.0}
 RELIABLE = ("/odom", "/map")
 TARGET_RATIO = 1.5  # bridged p50 within this many times the floor's
+GOAL_TOLERANCE = 0.05  # a ROS 2 goal's sim time within this fraction of the same goal's over ROS 1
+GOAL_SCENARIO = "arena"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--duration", type=duration_option, default=60.0, help="measured seconds (default 60)")
+    parser.add_argument(
+        "--goal-runs",
+        type=optional_runs_option,
+        default=2,
+        help="seeds of the same goal over ROS 1 and over ROS 2 (NavigateToPose), 0 = none (default 2)",
+    )
 
 
 def descendants(pid: int) -> list[int]:
@@ -69,12 +83,85 @@ def run(args: argparse.Namespace) -> str:
     if not python.exists():
         raise MrsNavError(f"bench ros2: no ROS 2 venv at {python.parent.parent} (MRS_NAV_ROS2=1 make install)")
     with tempfile.TemporaryDirectory(prefix="mrs_nav_bench_ros2_") as name:
-        return _measure(Path(name), python, args.duration)
+        latency = _measure(Path(name), python, args.duration)
+    return latency + (f"\n{goal_section(python, args.goal_runs)}" if args.goal_runs else "")
+
+
+def goal_run(python: Path, seed: int, over_ros2: bool) -> dict[str, Any]:
+    """``bench navigation``'s ROS run with a ros2_bridge (allowing NavigateToPose) beside the stack; the goal sent
+    over ROS 1 or, ``over_ros2``, by an rclpy NavigateToPose client through the bridge. The ROS 1 peer's JSON
+    (timed from the goal's publication, or its arrival at move_base), with the client's under ``ros2``."""
+    scenario = SCENARIOS[GOAL_SCENARIO]
+    goal = [str(v) for v in scenario.goal]
+    with tempfile.TemporaryDirectory(prefix="mrs_nav_bench_ros2_goal_") as name:
+        tmp = Path(name)
+        domain = 101 + free_port() % 100
+        launch = roslaunch_command(
+            "rrt_navigation.launch", WORLDS_DIR / scenario.world, scenario.start,
+            "real_time_factor:=0", "lockstep:=true", "rviz:=false", f"seed:={seed}",
+        )  # fmt: skip
+        bridge_cmd = [sys.executable, str(CHECKOUT / "scripts" / "ros2_bridge"), f"_domain_id:={domain}",
+                      "_allow_inbound:=[/navigate_to_pose]"]  # fmt: skip
+        peer_args = ["--goal", *goal, *(["--from-action", "--ready", str(tmp / "go")] if over_ros2 else [])]
+        with (
+            roscore(tmp) as env,
+            process(launch, env, tmp / "launch.log") as proc,
+            process(bridge_cmd, env, tmp / "ros2_bridge.log"),
+        ):
+            client = None
+            if over_ros2:
+                client = _ros2_process(
+                    python, domain, ["navigate", "--goal", *goal, "--after", str(tmp / "go"), "--out",
+                                     str(tmp / "ros2.json")], tmp / "client.log",
+                )  # fmt: skip
+            try:
+                result: dict[str, Any] = run_peer(proc, env, tmp, peer_args)
+                if client is not None:
+                    client.wait(timeout=60)
+            finally:
+                if client is not None:
+                    stop(client)
+        if over_ros2:
+            if not (tmp / "ros2.json").is_file():
+                raise RosProcessError(f"bench ros2: NavigateToPose client failed:\n{(tmp / 'client.log').read_text()}")
+            result["ros2"] = json.loads((tmp / "ros2.json").read_text())
+    return result
+
+
+def goal_section(python: Path, runs: int) -> str:
+    """Markdown: the same goal over ROS 1 and as a ROS 2 NavigateToPose goal, ``runs`` seeds, in sim time."""
+    rows, ratios = [], []
+    for seed in range(runs):
+        ros1 = goal_run(python, seed, over_ros2=False)
+        ros2 = goal_run(python, seed, over_ros2=True)
+        ratio = ros2["sim_s"] / ros1["sim_s"]
+        ratios.append(ratio)
+        rows.append([seed, "yes" if ros1["reached"] else "no", ros1["sim_s"], ros1["wall_s"],
+                     "yes" if ros2["reached"] else "no", ros2["ros2"]["status"], ros2["ros2"]["feedbacks"],
+                     ros2["sim_s"], ros2["wall_s"], ros2["ros2"]["wall_s"], f"{ratio:.3f}"])  # fmt: skip
+    table = markdown_table(
+        ["seed", "ROS 1 reached", "sim s", "wall s", "ROS 2 reached", "action status", "feedbacks", "sim s",
+         "wall s", "client wall s", "ROS 2 / ROS 1 sim"],
+        rows,
+    )  # fmt: skip
+    median = float(np.median(ratios))
+    ok = all(abs(r - 1.0) <= GOAL_TOLERANCE for r in ratios)
+    return (
+        f"The same goal ({GOAL_SCENARIO}: {SCENARIOS[GOAL_SCENARIO].start} to {SCENARIOS[GOAL_SCENARIO].goal}, "
+        "rrt_navigation.launch at max rate in lockstep, the seed of simulator and planner as given, a ros2_bridge "
+        "running beside the stack both times), over ROS 1 (/move_base_simple/goal, as `bench navigation`) and as a "
+        "NavigateToPose goal from an rclpy client through the bridge, one after the other in this run. Sim s: from "
+        "the goal reaching the navigation (its publication on ROS 1; its arrival on move_base/goal from ROS 2) to "
+        "`reached`. Client wall s: the ROS 2 "
+        f"client's send to its result (action_msgs status 4 = SUCCEEDED).\n\n{table}\n\n"
+        f"ROS 2 / ROS 1 sim time median {median:.3f}; target every seed within +-{GOAL_TOLERANCE:.0%}: "
+        f"**{'meets' if ok else 'MISSES'}**.\n"
+    )
 
 
 def _measure(tmp: Path, python: Path, duration: float) -> str:
     bridged, floor = 1 + free_port() % 100, 101 + free_port() % 100
-    samples: list[tuple[float, float]] = []  # (cpu s, rss MB) of both halves each second
+    samples: list[tuple[float, float, float]] = []  # (cpu s, rss MB of both halves, cpu s of the ROS 1 half)
     with contextlib.ExitStack() as stack:
         env = stack.enter_context(roscore(tmp))
         bridge_cmd = [sys.executable, str(CHECKOUT / "scripts" / "ros2_bridge"), f"_domain_id:={bridged}"]
@@ -100,7 +187,7 @@ def _measure(tmp: Path, python: Path, duration: float) -> str:
                 if time.monotonic() - wall0 > duration + 120:
                     raise RosProcessError("bench ros2: the publishers did not finish in time")
                 pids = descendants(bridge.pid)
-                samples.append((sum(map(cpu_seconds, pids)), sum(map(rss_mb, pids))))
+                samples.append((sum(map(cpu_seconds, pids)), sum(map(rss_mb, pids)), cpu_seconds(bridge.pid)))
                 time.sleep(1.0)
         time.sleep(1.0)  # the last messages
         for sub, _ in subs:
@@ -134,7 +221,7 @@ def _report(
     peer_sent: dict[str, list[int]],
     floor_sent: dict[str, list[int]],
     received: dict[str, dict[str, list[list[float]]]],
-    samples: list[tuple[float, float]],
+    samples: list[tuple[float, float, float]],
     duration: float,
 ) -> str:
     rows: list[list[object]] = []
@@ -154,22 +241,25 @@ def _report(
          "floor p99 ms", "p50 / floor"],
         rows,
     )  # fmt: skip
-    cpu, rss = np.array(samples).T if samples else (np.zeros(2), np.zeros(2))
+    cpu, rss, cpu_ros1 = np.array(samples).T if samples else (np.zeros(2), np.zeros(2), np.zeros(2))
     messages = sum(len(v) for v in peer_sent.values())
     cpu_per_msg = (cpu[-1] - cpu[0]) / messages * 1e6 if messages else float("nan")
+    ros1_per_msg = (cpu_ros1[-1] - cpu_ros1[0]) / messages * 1e6 if messages else float("nan")
     span = len(samples) - 1
     settled = rss[len(rss) // 5 :]
     slope = float(np.polyfit(np.arange(len(settled)), settled, 1)[0]) * 60 if len(settled) > 2 else float("nan")
     load, cores = os.getloadavg()[0], os.cpu_count() or 1
     verdict = "meets" if max(ratios) <= TARGET_RATIO and lost_reliable == 0 else "MISSES"
     return (
-        f"{duration:g} s measured after a 1 s warm-up (the issue asks for 10 minutes; this run is short). "
+        f"{duration:g} s measured after a 1 s warm-up (`--duration`; the issue asks for 10 minutes, this run is "
+        f"{'that' if duration >= 600 else 'shorter'}). "
         "Latency = a ROS 2 subscriber's receive time minus the publisher's wall-clock send time (the stamp), one "
         "machine. Bridged: a rospy publisher -> ros2_bridge (ROS 1 half, pipe, ROS 2 half) -> an rclpy subscriber; "
         "floor: an rclpy publisher -> an rclpy subscriber with the same messages, rates and QoS, on another domain "
         f"at the same time. Both on ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST with Fast DDS.\n\n{table}\n\n"
         f"Loss on the reliable topics (/odom, /map): {lost_reliable}. Bridge (both halves) CPU "
-        f"{cpu_per_msg:.0f} us per message ({(cpu[-1] - cpu[0]) / max(span, 1) * 100:.1f} % of one core over "
+        f"{cpu_per_msg:.0f} us per message (ROS 1 half {ros1_per_msg:.0f}, ROS 2 half "
+        f"{cpu_per_msg - ros1_per_msg:.0f}; {(cpu[-1] - cpu[0]) / max(span, 1) * 100:.1f} % of one core over "
         f"{span} s); RSS {rss[0]:.1f} MB at the start, {rss[-1]:.1f} MB at the end, {rss.max():.1f} MB at most, "
         f"drift {slope:+.3f} MB/min over the last 80 % of the run (load average {load:.1f} on {cores} cores).\n"
         f"Target p50 within {TARGET_RATIO:g}x the floor on every topic, zero loss on reliable topics: **{verdict}**.\n"

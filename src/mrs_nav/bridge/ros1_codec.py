@@ -9,18 +9,22 @@ The two wire layouts agree for every type the bridge carries except ``std_msgs/H
 ``seq`` in ROS 2: :data:`ROS1_ONLY_FIELDS` names such fields (skipped when decoding, written as zero when
 encoding). ROS 1's ``time``/``duration`` have the layout of ``builtin_interfaces/Time``/``Duration``.
 
-Numeric arrays decode to :class:`array.array` straight from the buffer (one copy, no per-element work), so a
-map or a scan costs about what copying its bytes costs.
+Numeric sequences decode to :class:`array.array` and fixed arrays to numpy arrays straight from the buffer (one
+copy, no per-element work), so a map or a scan costs about what copying its bytes costs.
 """
 
 from __future__ import annotations
 
 import array
+import enum
 import re
 import struct
 import sys
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from typing import Any
+
+import numpy as np
 
 from mrs_nav.errors import InvalidInputError
 
@@ -67,77 +71,144 @@ def _item_and_size(field_type: str) -> tuple[str, int | None] | None:
     return None
 
 
-class _Reader:
-    """A cursor over one message's bytes; every read checks that the bytes are there."""
+def _take(view: memoryview, pos: int, size: int) -> memoryview:
+    end = pos + size
+    if size < 0 or end > len(view):
+        raise InvalidInputError(f"message truncated: needs {end} bytes, has {len(view)}")
+    return view[pos:end]
 
-    def __init__(self, data: bytes | memoryview) -> None:
-        self.view = memoryview(data)
-        self.pos = 0
 
-    def take(self, size: int) -> memoryview:
-        end = self.pos + size
-        if size < 0 or end > len(self.view):
-            raise InvalidInputError(f"message truncated: needs {end} bytes, has {len(self.view)}")
-        chunk = self.view[self.pos : end]
-        self.pos = end
-        return chunk
+def _read_numbers(view: memoryview, pos: int, item: str, count: int, fixed: bool) -> tuple[Any, int]:
+    code = PRIMITIVES[item][1]
+    numbers = array.array(code)
+    chunk = _take(view, pos, count * numbers.itemsize)
+    pos += len(chunk)
+    if item == "boolean":
+        return [bool(v) for v in chunk], pos
+    if fixed:  # rclpy keeps fixed arrays as numpy arrays (and checks others element by element)
+        return np.frombuffer(chunk, dtype=np.dtype(code).newbyteorder("<")).copy(), pos
+    numbers.frombytes(chunk)
+    if not _LITTLE:
+        numbers.byteswap()
+    return numbers, pos
 
-    def length(self) -> int:
-        return int(_LENGTH.unpack(self.take(4))[0])
+
+def _make_plan(fields: tuple[tuple[str, str], ...], ros1_only: int) -> tuple[_Op, ...]:
+    """The decoding steps of a type with ``fields`` (name, ROS 2 type) in wire order, the first ``ros1_only``
+    of them ROS 1's only (primitives: decoded and dropped)."""
+    plan: list[_Op] = []
+    run: list[tuple[str | None, str]] = []  # primitive fields in a row: (name, struct code)
+
+    def close_run() -> None:
+        if run:
+            fmt = struct.Struct("<" + "".join(code for _, code in run))
+            plan.append(_Op(_Step.PRIMITIVES, tuple(name for name, _ in run), fmt))
+            run.clear()
+
+    for index, (name, field_type) in enumerate(fields):
+        kept = None if index < ros1_only else name
+        if field_type in PRIMITIVES:
+            run.append((kept, PRIMITIVES[field_type][0]))
+            continue
+        close_run()
+        array_of = _item_and_size(field_type)
+        if field_type == "string" or _BOUNDED_STRING.match(field_type):
+            plan.append(_Op(_Step.STRING, (name,)))
+        elif array_of is not None:
+            item, size = array_of
+            step = _Step.NUMBERS if item in PRIMITIVES else _Step.MESSAGES
+            plan.append(_Op(step, (name,), item=item, size=size))
+        else:
+            plan.append(_Op(_Step.MESSAGE, (name,), item=field_type))
+    close_run()
+    return tuple(plan)
+
+
+class _Step(enum.Enum):
+    PRIMITIVES = 1  # a run of primitive fields: one struct
+    STRING = 2
+    NUMBERS = 3  # an array of primitives: one copy
+    MESSAGES = 4  # an array of messages
+    MESSAGE = 5
+
+
+@dataclass(frozen=True)
+class _Op:
+    """One step of a type's decoding plan: ``names`` are its fields (None: a ROS 1-only field, skipped)."""
+
+    step: _Step
+    names: tuple[str | None, ...]
+    fmt: struct.Struct | None = None  # PRIMITIVES
+    item: str = ""  # the item type (NUMBERS, MESSAGES) or the message type (MESSAGE)
+    size: int | None = None  # a fixed array's length; None: a sequence (its length is on the wire)
 
 
 class Ros1Codec:
     """Decodes ROS 1 bytes into messages made by ``build`` and encodes objects' fields into ROS 1 bytes.
 
-    ``fields_of`` describes each type (see the module docstring); plans are made once per type and cached.
+    ``fields_of`` describes each type (see the module docstring). Decoding follows a plan made once per type:
+    a run of primitive fields is one ``struct`` unpack, a numeric array one copy (a sequence an
+    :class:`array.array`, a fixed array a numpy array, as rclpy keeps them), so that a message costs a few steps
+    per nested message rather than a step per field.
     """
 
     def __init__(self, fields_of: FieldsOf, build: Build) -> None:
         self._fields_of = fields_of
         self._build = build
+        self._plans: dict[str, tuple[_Op, ...]] = {}
 
     # --- decoding ---------------------------------------------------------------------------------------
     def decode(self, type_name: str, data: bytes | memoryview) -> Any:
         """The message of ``type_name`` in ``data``; InvalidInputError if the bytes do not hold exactly one."""
-        reader = _Reader(data)
+        view = memoryview(data)
         try:
-            msg = self._read(reader, type_name)
+            msg, end = self._read_message(view, 0, type_name)
         except (struct.error, UnicodeDecodeError, ValueError) as err:
             raise InvalidInputError(f"{type_name}: malformed ROS 1 message: {err}") from None
-        if reader.pos != len(reader.view):
-            raise InvalidInputError(f"{type_name}: {len(reader.view) - reader.pos} bytes left after the message")
+        if end != len(view):
+            raise InvalidInputError(f"{type_name}: {len(view) - end} bytes left after the message")
         return msg
 
-    def _read(self, reader: _Reader, field_type: str) -> Any:
-        primitive = PRIMITIVES.get(field_type)
-        if primitive is not None:
-            fmt = "<" + primitive[0]
-            return struct.unpack(fmt, reader.take(struct.calcsize(fmt)))[0]
-        if field_type == "string" or _BOUNDED_STRING.match(field_type):
-            return bytes(reader.take(reader.length())).decode()
-        array_of = _item_and_size(field_type)
-        if array_of is not None:
-            item, size = array_of
-            count = reader.length() if size is None else size
-            if item in PRIMITIVES:
-                return self._read_numbers(reader, item, count)
-            if count > len(reader.view):  # every item takes at least a byte: refuse absurd counts at once
-                raise InvalidInputError(f"{field_type}: {count} items announced in {len(reader.view)} bytes")
-            return [self._read(reader, item) for _ in range(count)]
-        for _, extra_type in ROS1_ONLY_FIELDS.get(field_type, ()):
-            self._read(reader, extra_type)
-        values = {name: self._read(reader, sub) for name, sub in self._fields_of(field_type).items()}
-        return self._build(field_type, values)
+    def _plan(self, type_name: str) -> tuple[_Op, ...]:
+        plan = self._plans.get(type_name)
+        if plan is None:
+            ros1_only = ROS1_ONLY_FIELDS.get(type_name, ())
+            fields = (*ros1_only, *self._fields_of(type_name).items())
+            plan = self._plans[type_name] = _make_plan(fields, len(ros1_only))
+        return plan
 
-    @staticmethod
-    def _read_numbers(reader: _Reader, item: str, count: int) -> Any:
-        code = PRIMITIVES[item][1]
-        numbers = array.array(code)
-        chunk = reader.take(count * numbers.itemsize)
-        numbers.frombytes(chunk)
-        if not _LITTLE:
-            numbers.byteswap()
-        return [bool(v) for v in numbers] if item == "boolean" else numbers
+    def _read_message(self, view: memoryview, pos: int, type_name: str) -> tuple[Any, int]:
+        values: dict[str, Any] = {}
+        for op in self._plan(type_name):
+            if op.step is _Step.PRIMITIVES:
+                assert op.fmt is not None
+                unpacked = zip(op.names, op.fmt.unpack_from(view, pos), strict=True)
+                values.update({name: value for name, value in unpacked if name is not None})
+                pos += op.fmt.size
+                continue
+            name = op.names[0]
+            assert name is not None
+            if op.step is _Step.MESSAGE:
+                values[name], pos = self._read_message(view, pos, op.item)
+                continue
+            count = op.size
+            if count is None or op.step is _Step.STRING:
+                (count,) = _LENGTH.unpack_from(view, pos)
+                pos += 4
+            if op.step is _Step.STRING:
+                values[name] = bytes(_take(view, pos, count)).decode()
+                pos += count
+            elif op.step is _Step.NUMBERS:
+                values[name], pos = _read_numbers(view, pos, op.item, count, fixed=op.size is not None)
+            else:
+                if count > len(view):  # every item takes at least a byte: refuse absurd counts at once
+                    raise InvalidInputError(f"sequence<{op.item}>: {count} items announced in {len(view)} bytes")
+                items = []
+                for _ in range(count):
+                    item, pos = self._read_message(view, pos, op.item)
+                    items.append(item)
+                values[name] = items
+        return self._build(type_name, values), pos
 
     # --- encoding ---------------------------------------------------------------------------------------
     def encode(self, type_name: str, msg: Any) -> bytes:

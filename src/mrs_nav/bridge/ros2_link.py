@@ -23,6 +23,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import IO, Any
 
+from mrs_nav.bridge.ros2_action import ACTION_NAME, ROS1_ACTION
 from mrs_nav.config_files import node_defaults
 from mrs_nav.errors import InvalidInputError
 
@@ -113,11 +114,13 @@ class Ros2BridgeConfig:
     @classmethod
     def from_mapping(cls, params: Mapping[str, Any]) -> Ros2BridgeConfig:
         merged = {**node_defaults("ros2_bridge"), **params}
-        known = {r.ros2 for r in INBOUND}
+        known = {r.ros2 for r in INBOUND} | {ACTION_NAME}
         allow = tuple(str(t) for t in merged["allow_inbound"] or ())
         unknown = sorted(set(allow) - known)
         if unknown:
-            raise InvalidInputError(f"allow_inbound: {unknown} not among the inbound topics {sorted(known)}")
+            raise InvalidInputError(
+                f"allow_inbound: {unknown} not among the inbound topics and actions {sorted(known)}"
+            )
         domain = int(merged["domain_id"])
         if not 0 <= domain <= 232:
             raise InvalidInputError(f"domain_id: {domain} is outside 0..232")
@@ -133,6 +136,16 @@ class Ros2BridgeConfig:
     def routes(self) -> tuple[Route, ...]:
         """Every outbound route, then the allowed inbound ones; a frame's channel is an index in this."""
         return OUTBOUND + tuple(r for r in INBOUND if r.ros2 in self.allow_inbound)
+
+    @property
+    def allow_action(self) -> bool:
+        """Whether the ROS 2 half serves NavigateToPose (sent on to move_base)."""
+        return ACTION_NAME in self.allow_inbound
+
+    @property
+    def action_names(self) -> tuple[str, str]:
+        """NavigateToPose's name on ROS 2 and move_base's on ROS 1, in the robot's namespace."""
+        return _namespaced(self.namespace, ACTION_NAME), _namespaced(self.namespace, "/" + ROS1_ACTION)
 
     def ros1_topic(self, route: Route) -> str:
         return _namespaced(self.namespace, route.ros1) if route.namespaced else route.ros1

@@ -14,6 +14,10 @@ the node instead of a map and sends the goal in ``odom``. With ``--world FILE`` 
 ``base_footprint``) to the world's obstacles over the ground-truth poses received (the latest at each moment the
 peer looks, not every one), negative when overlapping.
 
+With ``--from-action`` it sends no goal: once ready (and after writing the file ``--ready``, if given) it waits
+for the goal someone else sends to the ``move_base`` action (``mrs-nav bench ros2``: a ROS 2 client through
+ros2_bridge), and times from that goal's arrival.
+
 With ``--robot NS X Y`` (repeated, instead of ``--goal``; ``multi_robot.launch``) the same for every robot at
 once under its namespace (``/NS/map``, ``/NS/move_base_simple/goal``, ...): all goals go out together and the
 JSON holds ``robots`` (NS -> the fields above) and ``sim_s``/``wall_s`` from the goals to the last outcome.
@@ -30,6 +34,7 @@ from typing import Any
 
 import rospy
 from geometry_msgs.msg import PoseStamped
+from move_base_msgs.msg import MoveBaseActionGoal
 from nav_msgs.msg import OccupancyGrid, Odometry
 from std_msgs.msg import String, UInt32
 
@@ -136,6 +141,19 @@ class _Robot:
             sub.unregister()
 
 
+def _goal_from_action(ready: str | None, timeout: float) -> tuple[float, float]:
+    """Sim and wall time when a goal reached the ``move_base`` action (sent by another client)."""
+    arrived: list[tuple[float, float]] = []
+    sub = rospy.Subscriber(
+        "move_base/goal", MoveBaseActionGoal, lambda _m: arrived.append((rospy.get_time(), time.monotonic()))
+    )
+    if ready:
+        write_text(ready, "ready", "bench peer ready file")
+    _wait(lambda: bool(arrived), timeout, "goal on move_base/goal")
+    sub.unregister()
+    return arrived[0]
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     where = parser.add_mutually_exclusive_group(required=True)
@@ -145,6 +163,8 @@ def main() -> None:
     parser.add_argument("--timeout", type=float, default=300.0, help="wall s for the goal")
     parser.add_argument("--navigator", choices=sorted(NAVIGATORS), default="rrt_navigation")
     parser.add_argument("--world", help="world file: report the true footprint's smallest clearance to it")
+    parser.add_argument("--from-action", action="store_true", help="wait for a move_base goal instead of sending")
+    parser.add_argument("--ready", help="with --from-action: a file written once the goal may come")
     args = parser.parse_args(rospy.myargv()[1:])
     obstacles = Obstacles.from_world(load_world(args.world)) if args.world else None
     rospy.init_node("navigation_bench_peer", disable_signals=True)
@@ -155,9 +175,12 @@ def main() -> None:
     _wait(lambda: all(r.ready() for r in robots.values()), 120.0, "map and navigation node")
     first_map = rospy.get_time()
     _wait(lambda: rospy.get_time() > first_map + 3.0, 60.0, "3 s of sim time")
-    sim0, wall0 = rospy.get_time(), time.monotonic()
-    for robot in robots.values():
-        robot.send_goal()
+    if args.from_action:
+        sim0, wall0 = _goal_from_action(args.ready, args.timeout)
+    else:
+        sim0, wall0 = rospy.get_time(), time.monotonic()
+        for robot in robots.values():
+            robot.send_goal()
     _wait(lambda: all(r.outcome is not None for r in robots.values()), args.timeout, "outcome")
     _wait(lambda: all(r.caught_up() for r in robots.values()), 60.0, "ground truth up to the outcome")
     results = {ns: robot.result(sim0, wall0) for ns, robot in robots.items()}

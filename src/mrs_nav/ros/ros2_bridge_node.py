@@ -20,6 +20,7 @@ import rospy
 from roslib.message import get_message_class
 
 from mrs_nav.bridge.decoder import deserialize_exactly, first_non_finite, noetic_store
+from mrs_nav.bridge.ros2_action import ACTION_CHANNEL
 from mrs_nav.bridge.ros2_link import (
     Ros2BridgeConfig,
     Route,
@@ -32,6 +33,7 @@ from mrs_nav.bridge.ros2_link import (
 )
 from mrs_nav.errors import MrsNavError
 from mrs_nav.ros.params import private_params
+from mrs_nav.ros.ros2_bridge_action import MoveBaseForwarder
 
 NODE = "ros2_bridge"
 # Refusals and drops are logged at most once per this many seconds per topic (with the count).
@@ -85,6 +87,7 @@ class Ros2BridgeNode:
                         tcp_nodelay=True,
                     )
                 )
+        self._action = MoveBaseForwarder(config.action_names[1], self._send) if config.allow_action else None
         self._reader = threading.Thread(target=self._read_child, args=(self.child.stdout,), daemon=True)
         self._reader.start()
         rospy.on_shutdown(self.close)
@@ -98,14 +101,17 @@ class Ros2BridgeNode:
         if msg._connection_header.get("type") != route.type:
             self._refuse(route.ros1, f"type {msg._connection_header.get('type')}, expected {route.type}")
             return
-        frame = encode_frame(channel, msg._buff)
         try:
-            with self._lock:
-                self._to_child.write(frame)
-                self._to_child.flush()
+            self._send(channel, msg._buff)
             self.forwarded += 1
         except (BrokenPipeError, ValueError):  # the ROS 2 half is gone; _read_child ends the node
             pass
+
+    def _send(self, channel: int, payload: bytes) -> None:
+        frame = encode_frame(channel, payload)
+        with self._lock:
+            self._to_child.write(frame)
+            self._to_child.flush()
 
     def _read_child(self, stream: IO[bytes]) -> None:
         try:
@@ -119,6 +125,12 @@ class Ros2BridgeNode:
             rospy.signal_shutdown("ROS 2 half exited")
 
     def _publish_inbound(self, channel: int, payload: bytes) -> None:
+        if channel == ACTION_CHANNEL and self._action is not None:
+            try:
+                self._action.deliver(payload)
+            except MrsNavError as err:
+                self._refuse("NavigateToPose", str(err))
+            return
         entry = self._publishers.get(channel)
         if entry is None:
             self._refuse(f"channel {channel}", "not an allowed inbound channel")
@@ -143,6 +155,8 @@ class Ros2BridgeNode:
 
     def close(self) -> None:
         self._closing = True
+        if self._action is not None:
+            self._action.close()
         for subscriber in self._subscribers:
             subscriber.unregister()
         with self._lock, contextlib.suppress(OSError):  # a broken pipe: the ROS 2 half has gone already

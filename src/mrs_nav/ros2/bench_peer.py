@@ -5,6 +5,9 @@ data) and /map (transient local), as ros2_bridge publishes them, and at the end 
 topic ``[[stamp_ns, receive_time_s], ...]`` (stamps are the publishers' wall-clock send times, unique per
 message). ``python -m mrs_nav.ros2.bench_peer pub --duration S --warmup S`` publishes the same messages at the
 same rates from rclpy (the floor) and writes the measured stamps, per topic, to ``--out``.
+``python -m mrs_nav.ros2.bench_peer navigate --goal X Y --after FILE --out FILE`` waits for the file ``--after``,
+then sends one NavigateToPose goal (frame map) and writes JSON: the end ``status`` (action_msgs/GoalStatus),
+``error_code``, ``feedbacks`` received and ``wall_s`` from sending to the result.
 """
 
 from __future__ import annotations
@@ -18,7 +21,9 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
+from nav2_msgs.action import NavigateToPose
 from nav_msgs.msg import OccupancyGrid, Odometry
+from rclpy.action import ActionClient
 from rclpy.node import Node
 from sensor_msgs.msg import LaserScan
 
@@ -90,21 +95,62 @@ def publish(node: Node, out: Path, duration: float, warmup: float, subscribers: 
     out.write_text(json.dumps(sent))
 
 
+def _result(future: Any, deadline: float) -> Any:
+    """The future's result; the node spins in its own thread."""
+    while not future.done():
+        if time.monotonic() > deadline:
+            raise SystemExit("bench_peer: NavigateToPose did not end in time")
+        time.sleep(0.01)
+    return future.result()
+
+
+def navigate(node: Node, out: Path, goal_xy: tuple[float, float], after: Path, timeout: float) -> None:
+    deadline = time.monotonic() + timeout
+    client = ActionClient(node, NavigateToPose, "navigate_to_pose")
+    while not after.exists() or not client.server_is_ready():
+        if time.monotonic() > deadline:
+            raise SystemExit("bench_peer: no navigate_to_pose server (or no go-ahead) in time")
+        time.sleep(0.05)
+    goal = NavigateToPose.Goal()
+    goal.pose.header.frame_id = "map"
+    goal.pose.pose.position.x, goal.pose.pose.position.y = goal_xy
+    goal.pose.pose.orientation.w = 1.0
+    feedbacks = [0]
+    wall0 = time.monotonic()
+
+    def on_feedback(_msg: Any) -> None:
+        feedbacks[0] += 1
+
+    handle = _result(client.send_goal_async(goal, feedback_callback=on_feedback), deadline)
+    response = _result(handle.get_result_async(), deadline)
+    out.write_text(
+        json.dumps(
+            {"status": response.status, "error_code": response.result.error_code, "feedbacks": feedbacks[0],
+             "wall_s": time.monotonic() - wall0}
+        )
+    )  # fmt: skip
+
+
 def main(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("mode", choices=["sub", "pub"])
+    parser.add_argument("mode", choices=["sub", "pub", "navigate"])
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--ready", type=Path, default=None)
     parser.add_argument("--duration", type=float, default=60.0)
     parser.add_argument("--warmup", type=float, default=1.0)
     parser.add_argument("--subscribers", type=int, default=1)
     parser.add_argument("--wait-publishers", action="store_true", help="sub: ready once every topic has one")
+    parser.add_argument("--goal", type=float, nargs=2, default=(0.0, 0.0), help="navigate: x y in map (m)")
+    parser.add_argument("--after", type=Path, help="navigate: send the goal once this file exists")
+    parser.add_argument("--timeout", type=float, default=600.0, help="navigate: wall s for everything")
     args = parser.parse_args(argv[1:])
     with spinning_node(f"bench_{args.mode}") as node:
         if args.mode == "sub":
             subscribe(node, args.out, args.ready or args.out.with_suffix(".ready"), args.wait_publishers)
-        else:
+        elif args.mode == "pub":
             publish(node, args.out, args.duration, args.warmup, args.subscribers)
+        else:
+            navigate(node, args.out, tuple(args.goal), args.after, args.timeout)
     return 0
 
 

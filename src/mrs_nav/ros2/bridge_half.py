@@ -17,13 +17,17 @@ from typing import IO, Any
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 
+from mrs_nav.bridge.ros2_action import ACTION_CHANNEL, ACTION_NAME
 from mrs_nav.bridge.ros2_link import Qos, Ros2BridgeConfig, Route, encode_frame, read_frame
 from mrs_nav.errors import MrsNavError
 from mrs_nav.ros2.messages import codec, message_class
+from mrs_nav.ros2.navigate_to_pose import NavigateToPoseServer
 from mrs_nav.ros2.runtime import spinning_node
 
 # Dropped messages are logged at most once per this many seconds per route (with the count).
 DROP_LOG_PERIOD = 5.0
+# Executor threads with the NavigateToPose action: each executing goal waits in one, cancels need another.
+ACTION_THREADS = 4
 
 QOS: dict[Qos, QoSProfile] = {
     Qos.SENSOR: qos_profile_sensor_data,
@@ -80,9 +84,18 @@ class BridgeHalf:
                 )
             else:
                 self.publishers[channel] = node.create_publisher(cls, topic, QOS[route.qos])
+        self.action: NavigateToPoseServer | None = None
+        if config.allow_action:
+            self.action = NavigateToPoseServer(node, config.action_names[0], self.codec, self._send, log)
 
     def forward(self, channel: int, payload: bytes) -> None:
-        """One frame from the ROS 1 half: decode it and publish on its ROS 2 topic."""
+        """One frame from the ROS 1 half: decode it and publish on its ROS 2 topic (or give it to the action)."""
+        if channel == ACTION_CHANNEL and self.action is not None:
+            try:
+                self.action.deliver(payload)
+            except MrsNavError as err:
+                self.drops.drop(ACTION_NAME, str(err))
+            return
         publisher = self.publishers.get(channel)
         if publisher is None:
             self.drops.drop(f"channel {channel}", "not an outbound channel")
@@ -116,13 +129,19 @@ class BridgeHalf:
 
     def _to_ros1(self, channel: int, route: Route, msg: Any) -> None:
         try:
-            frame = encode_frame(channel, self.codec.encode(route.type, msg))
+            self._send(channel, self.codec.encode(route.type, msg))
         except MrsNavError as err:
             self.drops.drop(route.ros2, str(err))
-            return
+
+    def _send(self, channel: int, payload: bytes) -> None:
+        frame = encode_frame(channel, payload)
         with self._out_lock:
             self._out.write(frame)
             self._out.flush()
+
+    def close(self) -> None:
+        if self.action is not None:
+            self.action.close()
 
 
 def main(argv: list[str]) -> int:
@@ -132,7 +151,8 @@ def main(argv: list[str]) -> int:
     # Ctrl-C at a terminal or roslaunch's SIGINT to the group reaches this process too: it ends when the ROS 1
     # half closes its stdin instead, so that the last frames are not cut off.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    with spinning_node("ros2_bridge", config.namespace) as node:
+    threads = ACTION_THREADS if config.allow_action else 1
+    with spinning_node("ros2_bridge", config.namespace, threads) as node:
         half = BridgeHalf(config, node, stdout)
         log(
             f"domain {config.domain_id}, discovery {config.discovery_range}, namespace {config.namespace or '/'}, "
@@ -144,6 +164,8 @@ def main(argv: list[str]) -> int:
         except MrsNavError as err:
             log(f"pipe from the ROS 1 half broken: {err}")
             return 1
+        finally:
+            half.close()
     return 0
 
 

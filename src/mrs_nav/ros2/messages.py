@@ -24,7 +24,9 @@ def fields_of(type_name: str) -> Mapping[str, str]:
 
 
 def build(type_name: str, values: dict[str, Any]) -> Any:
-    return message_class(type_name)(**values)
+    """The message with ``values``, which the codec decoded with the field types rclpy keeps: the setters'
+    per-element checks (``ROS_PYTHON_CHECK_FIELDS``) would only repeat that, at most of a message's cost."""
+    return message_class(type_name)(check_fields=False, **values)
 
 
 def codec() -> Ros1Codec:

@@ -24,11 +24,14 @@ def _arrivals(sent: dict[str, list[int]], delay_s: float, drop: int = 0) -> dict
 
 def test_the_verdict_needs_the_floor_ratio_and_no_reliable_loss() -> None:
     bridged, floor = _sent(10**18), _sent(2 * 10**18)
-    samples = [(0.0, 100.0), (0.5, 100.0), (1.0, 100.0)]
+    samples = [(0.0, 100.0, 0.0), (0.5, 100.0, 0.2), (1.0, 100.0, 0.4)]
     fine = _report(
         bridged, floor, {"bridged": _arrivals(bridged, 0.0012), "floor": _arrivals(floor, 0.001)}, samples, 1
     )
     assert "**meets**" in fine
+    messages = sum(len(v) for v in bridged.values())
+    ros1, ros2 = round(0.4 / messages * 1e6), round(0.6 / messages * 1e6)
+    assert f"ROS 1 half {ros1}, ROS 2 half {ros2}" in fine  # the CPU of each half per message
     slow = _report(bridged, floor, {"bridged": _arrivals(bridged, 0.002), "floor": _arrivals(floor, 0.001)}, samples, 1)
     assert "**MISSES**" in slow
     lossy = _report(

@@ -193,6 +193,12 @@ def test_nothing_goes_from_ros2_into_ros1_unless_allowed() -> None:
     assert allowed.own_frame("tb3_0/base_footprint")
     assert not allowed.own_frame("tb3_1/base_footprint")
     assert default.own_frame("base_footprint")
+    assert not default.allow_action
+    assert not allowed.allow_action
+    action = Ros2BridgeConfig.from_mapping({"allow_inbound": ["/navigate_to_pose"], "namespace": "tb3_1"})
+    assert action.allow_action
+    assert not any(r.inbound for r in action.routes)  # the action is no topic route
+    assert action.action_names == ("/tb3_1/navigate_to_pose", "/tb3_1/move_base")
     with pytest.raises(InvalidInputError, match="allow_inbound"):
         Ros2BridgeConfig.from_mapping({"allow_inbound": ["/move_base_simple/goal"]})
     with pytest.raises(InvalidInputError, match="discovery_range"):
