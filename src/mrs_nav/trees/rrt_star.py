@@ -23,7 +23,8 @@ the first path) and returns the best path found; the tree's costs are monotone, 
 grows with more iterations. The path ends exactly on the goal position (a goal node).
 
 Before the first iteration the single arc from the start pose to the goal is tried (one compiled check, at any
-distance): when it is feasible and free it is the first path at once, and the search only shortens it. Until a
+distance), then a few turn-then-straight pairs of arcs (:mod:`mrs_nav.trees.primitives`): a feasible and free one is
+the first path at once, and the search only shortens it. Until a
 path exists, samples are drawn from the goal, the corridor guide (:mod:`mrs_nav.trees.guide`) and the map
 (:mod:`mrs_nav.trees.samplers`); afterwards from the informed set.
 """
@@ -43,6 +44,7 @@ from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.planning import PlanResult, path_length
 from mrs_nav.trees import arcs, kernels
 from mrs_nav.trees.guide import CorridorSampler
+from mrs_nav.trees.primitives import turn_points
 from mrs_nav.trees.rrt import check_budget, check_query
 from mrs_nav.trees.samplers import InformedSampler, UniformSampler
 from mrs_nav.trees.tree import ArcTree, Search, budget_used_up
@@ -174,6 +176,22 @@ class _Planner:
         if math.isfinite(length):
             self.goal_node = tree.add(self.goal, yaw, node, float(tree.cost[node] + length))
 
+    def try_direct(self) -> None:
+        """The obvious paths before any sampling: the single arc to the goal, else the shortest free
+        turn-then-straight pair of arcs (:func:`mrs_nav.trees.primitives.turn_points`)."""
+        self.try_goal(0, math.inf)
+        start, (gx, gy) = self.start, self.goal
+        mtr = self.config.min_turning_radius
+        for _, px, py in [] if self.goal_node >= 0 else turn_points(start, self.goal, mtr):
+            turn, yaw = kernels.checked_arc(start.x, start.y, start.yaw, px, py, self.limit, mtr, self.grid_args)
+            if not math.isfinite(turn):
+                continue
+            rest, end_yaw = kernels.checked_arc(px, py, yaw, gx, gy, self.limit, mtr, self.grid_args)
+            if math.isfinite(rest):
+                mid = self.tree.add((px, py), yaw, 0, turn)
+                self.goal_node = self.tree.add(self.goal, end_yaw, mid, turn + rest)
+                return
+
     def improve(self, iteration: int) -> bool:
         """Keep the path to the goal node when it is shorter than the best so far (and start sampling the new
         informed set); True when the goal node's cost went down."""
@@ -216,8 +234,7 @@ def grow_rrt_star(
     deadline = math.inf if config.time_budget is None else t0 + config.time_budget
     limit = config.iterations if config.iterations is not None else math.inf
     iteration = 0
-    # The obvious path first: one arc from the start, whatever the distance.
-    planner.try_goal(0, math.inf)
+    planner.try_direct()
     solved = planner.improve(iteration)
     uniform = UniformSampler(grid)
     # Goal and guided samples are drawn only until a path exists: with one already, the guide is not laid out.
