@@ -12,9 +12,11 @@ import importlib
 
 # Modules holding numba kernels, by name: importing them compiles (or loads) their kernels.
 KERNEL_MODULES: tuple[str, ...] = (
+    "mrs_nav.maps.route_kernels",
     "mrs_nav.sim.laser",
     "mrs_nav.slam.grid_kernels",
     "mrs_nav.slam.matcher_kernels",
+    "mrs_nav.trees.guide_kernels",
     "mrs_nav.trees.kernels",
 )
 

@@ -17,7 +17,9 @@ from typing import Any
 import numpy as np
 
 from mrs_nav.geometry import Pose2D
+from mrs_nav.maps.obstacles import Obstacles
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
+from mrs_nav.trees import arcs
 from mrs_nav.trees.rrt import RRTConfig, grow_rrt
 from mrs_nav.trees.rrt_star import RRTStarConfig, grow_rrt_star
 from mrs_nav.trees.scenarios import COURSE_GOAL, COURSE_START, OFFICE_GOALS
@@ -84,6 +86,13 @@ def run_rrt(grid: OccupancyGrid, start: Pose2D, goal: Any, seed: int) -> Run:
     config = RRTConfig(iterations=None, time_budget=10.0)
     r = attempt(grow_rrt, start, goal, grid, config, np.random.default_rng(seed), clock=CLOCK)
     return Run(r.search is not None, r.first_s, r.length, math.inf, r.iterations)
+
+
+def clearance(path: Any, obstacles: Obstacles) -> float:
+    """Least distance (m) from the arcs of ``path`` (sampled every 5 mm) to the exact world geometry."""
+    pieces = arcs.connect(path[:-1, :2], path[:-1, 2], path[1:, :2])
+    dense, _ = arcs.sample(pieces, 0.005, with_yaw=False)
+    return float(obstacles.signed_distance(dense[:, :2]).min())
 
 
 def median(values: list[float]) -> float:

@@ -20,19 +20,20 @@ from typing import Any
 import numpy as np
 
 from mrs_nav.bench.ompl_peer import OmplPlanner
+from mrs_nav.bench.planner_queries import building_section, query_section
 from mrs_nav.bench.planner_runs import (
     ARENA_GOAL,
     ARENA_START,
     CLOCK,
     Run,
     attempt,
+    clearance,
     fmt_ms,
     median,
     p90,
     ratio,
     run_rrt,
     run_rrt_star,
-    search_peak_mib,
 )
 from mrs_nav.bench.planner_scaling import scaling_section
 from mrs_nav.geometry import Pose2D
@@ -44,9 +45,8 @@ from mrs_nav.options import budget_option, length_option, runs_option
 from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.robot import BURGER_RADIUS
 from mrs_nav.tables import markdown_table
-from mrs_nav.trees import arcs
 from mrs_nav.trees.rrt_star import RRTStarConfig, grow_rrt_star
-from mrs_nav.trees.scenarios import OFFICE_GOALS, OFFICE_START, building_grid, course_grid
+from mrs_nav.trees.scenarios import OFFICE_GOALS, OFFICE_START, course_grid
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -55,12 +55,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--target", type=length_option, default=4.44, help="length target in metres (default 4.44)")
     parser.add_argument("--no-ompl", action="store_true", help="skip the OMPL comparison")
     parser.add_argument("--no-scaling", action="store_true", help="skip the map-size and iteration scaling")
-    parser.add_argument("--no-building", action="store_true", help="skip the 100 m building")
+    parser.add_argument("--no-building", action="store_true", help="skip the 100 m and 200 m buildings")
+    parser.add_argument("--no-queries", action="store_true", help="skip the first path per query against OMPL")
+    parser.add_argument("--query-seeds", type=runs_option, default=10, help="seeds per query (default 10)")
     parser.add_argument(
         "--first-seeds", type=runs_option, default=30, help="seeds of the first-path table (default 30)"
     )
     parser.add_argument("--compare-seeds", type=runs_option, default=3, help="seeds per world against OMPL (default 3)")
-    parser.add_argument("--building-seeds", type=runs_option, default=20, help="seeds in the building (default 20)")
+    parser.add_argument("--building-seeds", type=runs_option, default=10, help="seeds per building (default 10)")
     parser.add_argument(
         "--office",
         type=Path,
@@ -174,13 +176,6 @@ def _length_at(history: tuple[tuple[int, float, float], ...], budget: float) -> 
     return min((length for _, t, length in history if t <= budget), default=math.inf)
 
 
-def _clearance(path: Any, obstacles: Obstacles) -> float:
-    """Least distance (m) from the arcs of ``path`` (sampled every 5 mm) to the exact world geometry."""
-    pieces = arcs.connect(path[:-1, :2], path[:-1, 2], path[1:, :2])
-    dense, _ = arcs.sample(pieces, 0.005, with_yaw=False)
-    return float(obstacles.signed_distance(dense[:, :2]).min())
-
-
 def _first_paths(grid: OccupancyGrid, start: Pose2D, goals: Any, seeds: int, budget: float) -> list[float]:
     """First-path CPU times (inf = none within ``budget``) of our RRT* over ``seeds``, goals in turn."""
     out = []
@@ -238,7 +233,7 @@ def _comparison_section(args: argparse.Namespace) -> str:
             ours_l.append([_length_at(tried.search.history if tried.search else (), b) for b in BUDGETS])
             ours_f.append(tried.first_s)
             if tried.search is not None:
-                clear.append(_clearance(tried.search.result.path, obstacles))
+                clear.append(clearance(tried.search.result.path, obstacles))
             for label, planner, radius in OMPL_PEERS:
                 ompl = OmplPlanner(grid, start, goal, turning_radius=radius, planner=planner)
                 firsts.setdefault(label, []).append(ompl.solve(BUDGETS[-1], math.inf)[0])
@@ -273,33 +268,6 @@ def _comparison_section(args: argparse.Namespace) -> str:
     )
 
 
-def _building_section(args: argparse.Namespace) -> str:
-    t0 = CLOCK()
-    raw = building_grid()
-    grid = planning_grid(raw)
-    _ = grid.conservative_free_mask
-    prep = CLOCK() - t0
-    size = raw.width * raw.resolution
-    tile = raw.width // 5 * raw.resolution
-    goal = np.array([5.0 + 4 * tile, 5.0 + 4 * tile])
-    first = []
-    for seed in range(args.building_seeds):
-        config = RRTStarConfig(time_budget=1.0, stop_at_first=True)
-        tried = attempt(grow_rrt_star, OFFICE_START, goal, grid, config, np.random.default_rng(seed), clock=CLOCK)
-        first.append(tried.search.result.first_solution_s if tried.search is not None else math.inf)
-    memory = search_peak_mib(OFFICE_START, goal, grid, RRTStarConfig(time_budget=1.0, stop_at_first=True))
-    within = sum(t <= 1.0 for t in first)
-    held = (grid.values.nbytes + grid.free_mask.nbytes + grid.conservative_free_mask.nbytes) / 2**20
-    return (
-        f"### Building\n\nThe office tiled 5 x 5 with 1 m doors between tiles ({size:.0f} m square, "
-        f"{raw.width} x {raw.height} cells at {raw.resolution} m), start (-5, -5, 0) in the south-west office, goal "
-        f"({goal[0]:.1f}, {goal[1]:.1f}) in the north-east one. First path within 1 s (CPU): {within}/{len(first)} "
-        f"seeds (target >= 95 %); median {fmt_ms(median(first))} ms, p90 {fmt_ms(p90(first))} ms. Grid "
-        f"preparation (inflate + masks) {prep:.2f} s, {held:.0f} MiB; search peak traced memory {memory:.1f} MiB "
-        "(the wavefront graph is built on the first query and kept with the grid).\n"
-    )
-
-
 def run(args: argparse.Namespace) -> str:
     arena = course_grid().inflate(BURGER_RADIUS)
     arena_text = _arena_section(args, arena)
@@ -315,8 +283,10 @@ def run(args: argparse.Namespace) -> str:
     parts.append(_first_path_section(args))
     if not args.no_ompl:
         parts.append(_comparison_section(args))
+    if not args.no_queries:
+        parts.append(query_section(args.query_seeds))
     if not args.no_building:
-        parts.append(_building_section(args))
+        parts.append(building_section(args.building_seeds))
     if not args.no_scaling:
         parts.append(scaling_section(args))
     return "\n\n".join(parts)

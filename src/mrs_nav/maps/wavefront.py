@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 import weakref
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,20 +26,22 @@ from scipy.sparse.csgraph import dijkstra
 from mrs_nav.errors import NoPathFoundError
 from mrs_nav.geometry import FloatArray, format_point
 from mrs_nav.maps.occupancy_grid import BoolArray, IntArray, OccupancyGrid
+from mrs_nav.maps.route_kernels import Float32Array, goal_search, landmark_fields
 
 # Neighbour steps (rows, cols) and their lengths in coarse cells; the other half are the reverses.
 _STEPS = ((0, 1, 1.0), (1, 0, 1.0), (1, 1, math.sqrt(2.0)), (1, -1, math.sqrt(2.0)))
 
 
-@dataclass(frozen=True, eq=False)
-class _Coarse:
-    """A coarse free mask ``(H, W)`` and its cell graph (CSR, edge weights in coarse cells)."""
+#: Landmarks of a large map's coarse grid (:func:`route_landmarks`), and the coarse grid size from which they pay:
+#: four at the map's extremes settled a fifth of the cells plain A* did in the 100 m building.
+LANDMARKS = 4
+LANDMARK_MIN_CELLS = 100_000
 
-    free: BoolArray
-    graph: csr_matrix
-
-
-_CACHE: weakref.WeakKeyDictionary[OccupancyGrid, dict[tuple[int, bool], _Coarse]] = weakref.WeakKeyDictionary()
+# Per grid, by (factor, optimistic): the coarse free mask, and its cell graph (CSR, edge weights in coarse cells)
+# once a full wavefront needed it.
+_MASKS: weakref.WeakKeyDictionary[OccupancyGrid, dict[tuple[int, bool], BoolArray]] = weakref.WeakKeyDictionary()
+_LANDMARKS: weakref.WeakKeyDictionary[OccupancyGrid, dict[tuple[int, bool], Float32Array]] = weakref.WeakKeyDictionary()
+_GRAPHS: weakref.WeakKeyDictionary[OccupancyGrid, dict[tuple[int, bool], csr_matrix]] = weakref.WeakKeyDictionary()
 
 
 def coarse_free(grid: OccupancyGrid, factor: int, optimistic: bool = False) -> BoolArray:
@@ -72,13 +75,38 @@ def _graph(free: BoolArray) -> csr_matrix:
     return csr_matrix((np.concatenate(weight), (np.concatenate(src), np.concatenate(dst))), shape=(n, n))
 
 
-def _coarse(grid: OccupancyGrid, factor: int, optimistic: bool) -> _Coarse:
-    per_grid = _CACHE.setdefault(grid, {})
-    key = (factor, optimistic)
+def coarse_mask(grid: OccupancyGrid, cell_m: float, optimistic: bool = False) -> BoolArray:
+    """:func:`coarse_free` for cells of about ``cell_m`` metres, built once per grid and variant and kept while
+    the grid lives (the part of a route's cost that scales with the map: paid once per map)."""
+    key = (_factor(grid, cell_m), optimistic)
+    per_grid = _MASKS.setdefault(grid, {})
     if key not in per_grid:
-        free = coarse_free(grid, factor, optimistic)
-        per_grid[key] = _Coarse(free, _graph(free))
+        per_grid[key] = coarse_free(grid, key[0], optimistic)
     return per_grid[key]
+
+
+def route_landmarks(grid: OccupancyGrid, cell_m: float, optimistic: bool = False) -> Float32Array:
+    """The landmark distances (:func:`mrs_nav.maps.route_kernels.landmark_fields`) that :func:`goal_field` uses on
+    this grid: ``LANDMARKS`` fields on a coarse grid of ``LANDMARK_MIN_CELLS`` cells or more, none on a smaller
+    one (there A* with the octile bound already takes about a millisecond). Built once per grid and kept."""
+    key = (_factor(grid, cell_m), optimistic)
+    per_grid = _LANDMARKS.setdefault(grid, {})
+    if key not in per_grid:
+        free = coarse_mask(grid, cell_m, optimistic)
+        per_grid[key] = landmark_fields(free, LANDMARKS if free.size >= LANDMARK_MIN_CELLS else 0)
+    return per_grid[key]
+
+
+def _coarse_graph(grid: OccupancyGrid, cell_m: float, optimistic: bool) -> csr_matrix:
+    key = (_factor(grid, cell_m), optimistic)
+    per_grid = _GRAPHS.setdefault(grid, {})
+    if key not in per_grid:
+        per_grid[key] = _graph(coarse_mask(grid, cell_m, optimistic))
+    return per_grid[key]
+
+
+def _factor(grid: OccupancyGrid, cell_m: float) -> int:
+    return max(1, round(cell_m / grid.resolution))
 
 
 @dataclass(frozen=True, eq=False)
@@ -139,30 +167,73 @@ class Wavefront:
 
 
 def wavefront(grid: OccupancyGrid, goal: npt.ArrayLike, cell_m: float = 0.2, optimistic: bool = False) -> Wavefront:
-    """The navigation function towards ``goal`` (x, y) on ``grid`` coarsened to cells of about ``cell_m`` metres.
+    """The navigation function towards ``goal`` (x, y) on ``grid`` coarsened to cells of about ``cell_m`` metres,
+    over every cell that reaches the goal (one Dijkstra run over the whole coarse grid).
 
     The goal's coarse cell seeds the search even when it is not free in the coarse mask (a goal next to a wall),
     as long as one of its neighbours is.
     """
-    factor = max(1, round(cell_m / grid.resolution))
-    coarse = _coarse(grid, factor, optimistic)
+    free = coarse_mask(grid, cell_m, optimistic)
+    graph = _coarse_graph(grid, cell_m, optimistic)
+
+    def search(seeds: list[int]) -> tuple[FloatArray, IntArray]:
+        dist, pred, _ = dijkstra(graph, indices=seeds, return_predecessors=True, min_only=True)
+        return dist, np.where(pred >= 0, pred, -1).astype(np.intp)
+
+    return _seeded(grid, _factor(grid, cell_m), free, goal, search)
+
+
+def goal_field(
+    grid: OccupancyGrid, goal: npt.ArrayLike, start: npt.ArrayLike, cell_m: float = 0.2, optimistic: bool = False
+) -> Wavefront:
+    """:func:`wavefront` settled only as far as ``start`` (x, y) needs (A* from the goal towards it,
+    :func:`mrs_nav.maps.route_kernels.goal_search`): exact distances in the band of cells no farther from the goal
+    via them than the start is, ``inf`` elsewhere; its corridor from ``start`` is a shortest one like the full
+    field's. The search costs what the band holds, not what the map holds."""
+    free = coarse_mask(grid, cell_m, optimistic)
+    landmarks = route_landmarks(grid, cell_m, optimistic)
+    rows, cols = free.shape
+    factor = _factor(grid, cell_m)
+    row, col, inside = grid.cells(np.asarray(start, dtype=np.float64)[:2])
+    target = int(row[0] // factor) * cols + int(col[0] // factor) if inside[0] else -1
+    if target >= 0 and not free.reshape(-1)[target]:
+        # A start cell outside the coarse free space is never reached: do not search the whole map to learn it.
+        return Wavefront(grid, factor, _xy(goal), np.full((rows, cols), math.inf), np.full(rows * cols, -1))
+    return _seeded(
+        grid, factor, free, goal, lambda seeds: goal_search(free, np.array(seeds, dtype=np.intp), target, landmarks)
+    )
+
+
+def _xy(point: npt.ArrayLike) -> tuple[float, float]:
+    xy = np.asarray(point, dtype=np.float64)[:2]
+    return float(xy[0]), float(xy[1])
+
+
+def _seeded(
+    grid: OccupancyGrid,
+    factor: int,
+    free: BoolArray,
+    goal: npt.ArrayLike,
+    search: Callable[[list[int]], tuple[FloatArray, IntArray]],
+) -> Wavefront:
+    """The field of ``search`` (coarse-cell distances and next cells from seed cells) on ``free`` (cells of
+    ``factor`` grid cells) seeded at the goal's cell, or at its free neighbours when that cell is not free."""
     goal_xy = np.asarray(goal, dtype=np.float64)[:2]
-    rows, cols = coarse.free.shape
+    rows, cols = free.shape
     distance = np.full(rows * cols, math.inf)
     towards = np.full(rows * cols, -1, dtype=np.intp)
     row, col, inside = grid.cells(goal_xy)
     if inside[0]:
         g = int(row[0] // factor) * cols + int(col[0] // factor)
-        seeds = [g] if coarse.free.reshape(-1)[g] else _free_neighbours(coarse.free, g)
+        seeds = [g] if free.reshape(-1)[g] else _free_neighbours(free, g)
         if seeds:
-            dist, pred, _ = dijkstra(coarse.graph, indices=seeds, return_predecessors=True, min_only=True)
+            dist, towards = search(seeds)
             distance = dist * (factor * grid.resolution)
-            towards = np.where(pred >= 0, pred, -1).astype(np.intp)
             if g not in seeds:
                 distance[g] = float(np.min(distance[seeds])) + factor * grid.resolution
                 towards[seeds] = g
                 towards[g] = -1
-    return Wavefront(grid, factor, (float(goal_xy[0]), float(goal_xy[1])), distance.reshape(rows, cols), towards)
+    return Wavefront(grid, factor, _xy(goal_xy), distance.reshape(rows, cols), towards)
 
 
 def _free_neighbours(free: BoolArray, flat: int) -> list[int]:

@@ -18,11 +18,13 @@ import numpy as np
 from mrs_nav.errors import NoPathFoundError
 from mrs_nav.geometry import FloatArray
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
-from mrs_nav.maps.wavefront import Wavefront, wavefront
-from mrs_nav.trees import kernels
+from mrs_nav.maps.wavefront import Wavefront, goal_field
+from mrs_nav.trees import guide_kernels, kernels
 
 # Draws per guided target (the first one in free space is kept).
 _TRIES = 8
+# Guided targets whose random numbers are drawn together.
+_BLOCK = 64
 
 
 class CorridorSampler:
@@ -37,10 +39,13 @@ class CorridorSampler:
         # Metres still to go at each corridor point, decreasing from the start to 0 at the goal.
         steps = np.hypot(*np.diff(path, axis=0).T)
         self.to_go = np.append(np.cumsum(steps[::-1])[::-1], 0.0)
-        self._frontier = float(self.to_go[0])
-        # Nodes reported since the frontier was last read: looked up in one batch when it is needed.
-        self._pending: list[FloatArray] = []
+        #: The least distance to go (m) among the nodes reported so far (the corridor's start before any).
+        self.frontier = float(self.to_go[0])
         self._grid_args = kernels.grid_args(wave.grid)
+        # Random numbers of the next guided targets (see sample); none drawn yet.
+        self._ahead = np.zeros((_BLOCK, _TRIES))
+        self._noise = np.zeros((_BLOCK, _TRIES, 2))
+        self._next = _BLOCK
 
     @classmethod
     def towards(
@@ -50,7 +55,7 @@ class CorridorSampler:
         None when neither coarse grid (the conservative one, then the optimistic one that keeps passages
         narrower than a coarse cell open) connects them."""
         for optimistic in (False, True):
-            wave = wavefront(grid, goal, cell_m, optimistic)
+            wave = goal_field(grid, goal, start, cell_m, optimistic)
             try:
                 path = wave.corridor(start)
             except NoPathFoundError:
@@ -60,22 +65,24 @@ class CorridorSampler:
 
     def reached(self, position: FloatArray) -> None:
         """Note a new tree node: it moves the frontier when it is geodesically closer to the goal."""
-        self._pending.append(position)
-
-    @property
-    def frontier(self) -> float:
-        """The least distance to go (m) among the nodes reported so far (the corridor's start before any)."""
-        if self._pending:
-            self._frontier = min(self._frontier, float(self.wave.at(np.array(self._pending)).min()))
-            self._pending.clear()
-        return self._frontier
+        here = guide_kernels.field_at(
+            float(position[0]), float(position[1]), self.wave.distance, self.wave.factor, self._grid_args
+        )
+        self.frontier = min(self.frontier, here)
 
     def sample(self, rng: np.random.Generator) -> FloatArray:
         """A target near the corridor point ``U(0, lookahead)`` metres beyond the frontier, in a free cell whose
-        neighbours are free too when one of a few draws is (a target in a wall only wastes an iteration)."""
-        to_go = self.frontier - rng.random(_TRIES) * self.lookahead
-        k = np.minimum(np.searchsorted(-self.to_go, -to_go), len(self.path) - 1)
-        points = self.path[k] + rng.normal(0.0, self.spread, (_TRIES, 2))
-        free = kernels.lookup(points, self._grid_args[0], self._grid_args)
-        out: FloatArray = points[int(np.argmax(free))]
-        return out
+        neighbours are free too when one of a few draws is (a target in a wall only wastes an iteration).
+
+        The random numbers are drawn for ``_BLOCK`` targets at a time (seeded determinism is kept: the same
+        generator gives the same blocks) and each target is one compiled call."""
+        if self._next == _BLOCK:
+            self._ahead = rng.random((_BLOCK, _TRIES))
+            self._noise = rng.normal(0.0, self.spread, (_BLOCK, _TRIES, 2))
+            self._next = 0
+        i = self._next
+        self._next += 1
+        x, y = guide_kernels.guided_target(
+            self._ahead[i], self._noise[i], self.frontier, self.lookahead, self.to_go, self.path, self._grid_args
+        )
+        return np.array([x, y])

@@ -21,6 +21,12 @@ asymptotic optimality, and twice the bound rewires more widely early on, which r
 sooner in the arena benchmark. The search runs until the iteration or time budget ends (``stop_at_first`` ends it at
 the first path) and returns the best path found; the tree's costs are monotone, so the best path's length never
 grows with more iterations. The path ends exactly on the goal position (a goal node).
+
+Before the first iteration the single arc from the start pose to the goal is tried (one compiled check, at any
+distance), then a few turn-then-straight pairs of arcs (:mod:`mrs_nav.trees.primitives`): a feasible and free one is
+the first path at once, and the search only shortens it. Until a
+path exists, samples are drawn from the goal, the corridor guide (:mod:`mrs_nav.trees.guide`) and the map
+(:mod:`mrs_nav.trees.samplers`); afterwards from the informed set.
 """
 
 from __future__ import annotations
@@ -38,14 +44,13 @@ from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.planning import PlanResult, path_length
 from mrs_nav.trees import arcs, kernels
 from mrs_nav.trees.guide import CorridorSampler
-from mrs_nav.trees.rrt import check_budget, check_query, sample_random_position
+from mrs_nav.trees.primitives import turn_points
+from mrs_nav.trees.rrt import check_budget, check_query
+from mrs_nav.trees.samplers import InformedSampler, UniformSampler
 from mrs_nav.trees.tree import ArcTree, Search, budget_used_up
 
 # How many nearest nodes a guided target may be steered from.
 _AHEAD_CANDIDATES = 8
-# Informed samples are drawn this many at a time, for at most this many batches before falling back to the map.
-_INFORMED_BATCH = 256
-_INFORMED_BATCHES = 8
 
 
 @dataclass(frozen=True)
@@ -90,48 +95,21 @@ def default_gamma(grid: OccupancyGrid) -> float:
     return GAMMA_FACTOR * bound
 
 
-class InformedSampler:
-    """Free positions uniform in the ellipse ``|x - start| + |x - goal| <= best`` (Gammell et al.'s informed set).
-
-    The ellipse is fixed per best length, so its transform is built once per improvement, not per sample.
-    """
-
-    def __init__(self, grid: OccupancyGrid, start: FloatArray, goal: FloatArray, best: float) -> None:
-        self.grid = grid
-        c_min = float(np.hypot(*(goal - start)))
-        a = best / 2.0
-        b = math.sqrt(max(best * best - c_min * c_min, 0.0)) / 2.0
-        angle = math.atan2(goal[1] - start[1], goal[0] - start[0])
-        c, s = math.cos(angle), math.sin(angle)
-        # unit disk -> ellipse: scale by (a, b), rotate by angle
-        self.transform = np.array([[a * c, a * s], [-b * s, b * c]])
-        self.centre = (start + goal) / 2.0
-        self._grid_args = kernels.grid_args(grid)
-        self._free = np.zeros((0, 2))
-        self._next = 0
-
-    def sample(self, rng: np.random.Generator) -> FloatArray:
-        """One free position in the ellipse (or anywhere free on the map if the ellipse shows none).
-
-        Points are drawn in batches and the free ones handed out in turn: each is still uniform over the free
-        part of the ellipse, and a batch costs a handful of numpy calls instead of a handful per sample."""
-        for _ in range(_INFORMED_BATCHES):
-            if self._next < len(self._free):
-                self._next += 1
-                out: FloatArray = self._free[self._next - 1]
-                return out
-            r = np.sqrt(rng.random(_INFORMED_BATCH))
-            t = rng.random(_INFORMED_BATCH) * (2.0 * math.pi)
-            points = np.stack([r * np.cos(t), r * np.sin(t)], axis=1) @ self.transform + self.centre
-            self._free = points[kernels.lookup(points, self._grid_args[1], self._grid_args)]
-            self._next = 0
-        return sample_random_position(self.grid, rng)
-
-
 class _Planner:
     """One RRT* search; the state shared by the steps of an iteration."""
 
-    def __init__(self, start: Pose2D, goal: FloatArray, grid: OccupancyGrid, config: RRTStarConfig) -> None:
+    def __init__(
+        self,
+        start: Pose2D,
+        goal: FloatArray,
+        grid: OccupancyGrid,
+        config: RRTStarConfig,
+        *,
+        clock: Callable[[], float],
+        t0: float,
+    ) -> None:
+        # Improvements are stamped in seconds of ``clock`` since ``t0``.
+        self.clock, self.t0 = clock, t0
         self.start = start
         self.goal = goal
         self.grid = grid
@@ -141,6 +119,11 @@ class _Planner:
         self.goal_node = -1
         self.grid_args = kernels.grid_args(grid)
         self.limit = arcs.alpha_limit(config.max_alpha)
+        self.best_cost = math.inf
+        self.best_path: FloatArray | None = None
+        self.informed: InformedSampler | None = None
+        self.first_s: float | None = None
+        self.history: list[tuple[int, float, float]] = []
 
     def extend(self, target: FloatArray, ahead: bool = False) -> int:
         """Steps 2-4 towards ``target`` (compiled: :func:`mrs_nav.trees.kernels.extend_star`); returns the new
@@ -172,11 +155,13 @@ class _Planner:
             self.goal_node = new
         return new
 
-    def try_goal(self, node: int) -> None:
-        """Connect ``node`` straight to the goal when it is within one step: finds the first path sooner."""
+    def try_goal(self, node: int, reach: float) -> None:
+        """Connect ``node`` by one arc to the goal when it is within ``reach`` metres and the arc is feasible and
+        free (from each new node within a step: finds the first path sooner; from the root at any distance: the
+        obvious path first, at the price of one arc check)."""
         tree = self.tree
         x, y = tree.position[node]
-        if self.goal_node >= 0 or math.hypot(self.goal[0] - x, self.goal[1] - y) > self.config.step:
+        if self.goal_node >= 0 or math.hypot(self.goal[0] - x, self.goal[1] - y) > reach:
             return
         length, yaw = kernels.checked_arc(
             x,
@@ -190,6 +175,42 @@ class _Planner:
         )
         if math.isfinite(length):
             self.goal_node = tree.add(self.goal, yaw, node, float(tree.cost[node] + length))
+
+    def try_direct(self) -> None:
+        """The obvious paths before any sampling: the single arc to the goal, else the shortest free
+        turn-then-straight pair of arcs (:func:`mrs_nav.trees.primitives.turn_points`)."""
+        self.try_goal(0, math.inf)
+        start, (gx, gy) = self.start, self.goal
+        mtr = self.config.min_turning_radius
+        for _, px, py in [] if self.goal_node >= 0 else turn_points(start, self.goal, mtr):
+            turn, yaw = kernels.checked_arc(start.x, start.y, start.yaw, px, py, self.limit, mtr, self.grid_args)
+            if not math.isfinite(turn):
+                continue
+            rest, end_yaw = kernels.checked_arc(px, py, yaw, gx, gy, self.limit, mtr, self.grid_args)
+            if math.isfinite(rest):
+                mid = self.tree.add((px, py), yaw, 0, turn)
+                self.goal_node = self.tree.add(self.goal, end_yaw, mid, turn + rest)
+                return
+
+    def improve(self, iteration: int) -> bool:
+        """Keep the path to the goal node when it is shorter than the best so far (and start sampling the new
+        informed set); True when the goal node's cost went down."""
+        g, tree = self.goal_node, self.tree
+        if g < 0 or tree.cost[g] >= self.best_cost - kernels.COST_EPS:
+            return False
+        # Arc cost and sampled-path length differ by the chords' sag (< 0.1 %): the kept path must be
+        # shorter in the reported length too, so that the reported length never grows.
+        self.best_cost = float(tree.cost[g])
+        if self.config.informed:
+            self.informed = InformedSampler(self.grid, self.start.position, self.goal, self.best_cost)
+        path = tree.path_poses(tree.branch(g), self.grid.resolution)
+        length = path_length(path)
+        if self.best_path is None or length < path_length(self.best_path):
+            self.best_path = path
+            seconds = self.clock() - self.t0
+            self.first_s = seconds if self.first_s is None else self.first_s
+            self.history.append((iteration, seconds, length))
+        return True
 
 
 def grow_rrt_star(
@@ -208,25 +229,24 @@ def grow_rrt_star(
     t0 = clock()
     goal = np.asarray(goal, dtype=np.float64)[:2]
     check_query(grid, start, goal)
-    planner = _Planner(start, goal, grid, config)
+    planner = _Planner(start, goal, grid, config, clock=clock, t0=t0)
     tree = planner.tree
     deadline = math.inf if config.time_budget is None else t0 + config.time_budget
     limit = config.iterations if config.iterations is not None else math.inf
-    best_cost = math.inf
-    best_path: FloatArray | None = None
-    informed: InformedSampler | None = None
+    iteration = 0
+    planner.try_direct()
+    solved = planner.improve(iteration)
+    uniform = UniformSampler(grid)
+    # Goal and guided samples are drawn only until a path exists: with one already, the guide is not laid out.
     guide = (
         CorridorSampler.towards(
             grid, start.position, goal, cell_m=config.guide_cell, lookahead=config.step, spread=config.guide_cell
         )
-        if config.guide_bias > 0.0
+        if config.guide_bias > 0.0 and not solved
         else None
     )
     guide_bias = config.guide_bias if guide is not None else 0.0
-    history: list[tuple[int, float, float]] = []
-    first_s: float | None = None
-    iteration = 0
-    while iteration < limit and clock() < deadline:
+    while not (solved and config.stop_at_first) and iteration < limit and clock() < deadline:
         iteration += 1
         draw = rng.random() if planner.goal_node < 0 else 1.0
         ahead = False
@@ -237,39 +257,30 @@ def grow_rrt_star(
         elif guide is not None and draw < config.goal_bias + guide_bias:
             target = guide.sample(rng)
             ahead = True
-        elif informed is not None:
-            target = informed.sample(rng)
+        elif planner.informed is not None:
+            target = planner.informed.sample(rng)
         else:
-            target = sample_random_position(grid, rng)
+            target = uniform.sample(rng)
         new = planner.extend(target, ahead)
         if new < 0:
             continue
         if guide is not None:
             guide.reached(tree.position[new])
-        planner.try_goal(new)
-        g = planner.goal_node
-        if g >= 0 and tree.cost[g] < best_cost - kernels.COST_EPS:
-            # Arc cost and sampled-path length differ by the chords' sag (< 0.1 %): the kept path must be
-            # shorter in the reported length too, so that the reported length never grows.
-            best_cost = float(tree.cost[g])
-            if config.informed:
-                informed = InformedSampler(grid, start.position, goal, best_cost)
-            path = tree.path_poses(tree.branch(g), grid.resolution)
-            length = path_length(path)
-            if best_path is None or length < path_length(best_path):
-                best_path = path
-                now = clock() - t0
-                first_s = now if first_s is None else first_s
-                history.append((iteration, now, length))
-            if config.stop_at_first:
-                break
+        planner.try_goal(new, config.step)
+        solved = planner.improve(iteration) or solved
     elapsed = clock() - t0
-    if best_path is None or first_s is None:
+    if planner.best_path is None or planner.first_s is None:
         raise budget_used_up(tree, used_iterations=iteration >= limit, time_s=elapsed, iterations=iteration)
     result = PlanResult(
-        best_path, path_length(best_path), elapsed, first_s, iteration, len(tree), "best path within budget"
+        planner.best_path,
+        path_length(planner.best_path),
+        elapsed,
+        planner.first_s,
+        iteration,
+        len(tree),
+        "best path within budget",
     )
-    return Search(result, tree, tuple(history))
+    return Search(result, tree, tuple(planner.history))
 
 
 def rrt_star(

@@ -64,7 +64,7 @@ def test_no_path_within_budget_exits_2_and_still_draws_the_tree(
             "--planner",
             "rrt_star",
             "--start",
-            "-1.5,-1.5,0",
+            "-1.5,-1.5,3.14",  # facing away from the goal: no single arc reaches it, one iteration cannot
             "--goal",
             "1.5,1.5",
             "--iterations",

@@ -9,7 +9,8 @@ import pytest
 
 from mrs_nav.errors import NoPathFoundError
 from mrs_nav.maps.occupancy_grid import OCCUPIED, OccupancyGrid
-from mrs_nav.maps.wavefront import wavefront
+from mrs_nav.maps.route_kernels import goal_search, landmark_fields
+from mrs_nav.maps.wavefront import coarse_mask, goal_field, wavefront
 
 
 def _wall_with_gap() -> OccupancyGrid:
@@ -60,3 +61,47 @@ def test_coarse_cells_are_free_only_when_all_their_cells_are_unless_optimistic()
     with pytest.raises(NoPathFoundError):
         strict.corridor(np.array([1.05, 1.05]))
     assert loose.corridor(np.array([1.05, 1.05])).shape[1] == 2
+
+
+def _rooms() -> OccupancyGrid:
+    """Four 2 m rooms in a row, each wall with one door, at alternating ends (a detour the octile bound misses)."""
+    values = np.zeros((20, 80), dtype=np.int8)
+    for k, wall in enumerate((20, 40, 60)):
+        values[:, wall] = OCCUPIED
+        door = slice(1, 4) if k % 2 else slice(16, 19)
+        values[door, wall] = 0
+    return OccupancyGrid(values, 0.1, (0.0, 0.0, 0.0))
+
+
+@pytest.mark.parametrize("landmarks", [0, 3])
+def test_the_goal_field_settles_exact_distances_and_the_same_corridor_length_as_the_full_wavefront(
+    landmarks: int,
+) -> None:
+    grid = _rooms()
+    start, goal = np.array([0.55, 0.55]), np.array([7.55, 0.55])
+    full = wavefront(grid, goal, cell_m=0.1)
+    free = coarse_mask(grid, 0.1)
+    seeds = np.array([5 * 80 + 75], dtype=np.intp)
+    fields = landmark_fields(free, landmarks)
+    dist, _ = goal_search(free, seeds, 5 * 80 + 5, fields)
+    settled = np.isfinite(dist)
+    np.testing.assert_allclose(dist[settled] * 0.1, full.distance.ravel()[settled], atol=1e-12)
+    assert 0 < settled.sum() < np.isfinite(full.distance).sum()  # a band, not the map
+    field = goal_field(grid, goal, start, cell_m=0.1)
+    assert field.at(start[None])[0] == pytest.approx(full.at(start[None])[0])
+    corridor = field.corridor(start)
+    assert math.isclose(
+        np.hypot(*np.diff(corridor, axis=0).T).sum(),
+        np.hypot(*np.diff(full.corridor(start), axis=0).T).sum(),
+        rel_tol=0.05,
+    )
+    assert grid.is_free(corridor).all()
+
+
+def test_landmarks_narrow_the_band_a_detour_makes_the_search_settle() -> None:
+    free = coarse_mask(_rooms(), 0.1)
+    seeds, start = np.array([5 * 80 + 75], dtype=np.intp), 5 * 80 + 5
+    plain, _ = goal_search(free, seeds, start, landmark_fields(free, 0))
+    guided, _ = goal_search(free, seeds, start, landmark_fields(free, 3))
+    assert np.isfinite(guided).sum() < 0.7 * np.isfinite(plain).sum()
+    assert guided[start] == pytest.approx(plain[start])

@@ -111,6 +111,23 @@ def test_a_start_and_goal_next_to_the_inflated_walls_can_be_left_and_reached(are
     assert_valid_path(search.result.path, arena, start, goal, 1e-9)
 
 
+@pytest.mark.parametrize(("yaw", "nodes"), [(0.3, 2), (3.0, 3)])
+def test_rrt_star_takes_a_free_arc_or_turn_then_straight_to_a_far_goal_at_once_and_only_shortens_it(
+    yaw: float, nodes: int
+) -> None:
+    grid = OccupancyGrid(np.zeros((200, 400), dtype=np.int8), 0.05, (0.0, 0.0, 0.0)).inflate(0.105)
+    # 17.7 m away (many steps of 1.5 m); facing away from it, no single arc reaches it: turn, then straight
+    start, goal = Pose2D(3.0, 5.0, yaw), np.array([18.0, 6.0])
+    first = grow_rrt_star(start, goal, grid, RRTStarConfig(iterations=0, time_budget=None), np.random.default_rng(0))
+    assert first.result.iterations == 0
+    assert len(first.tree) == nodes  # the root, the end of the turn, the goal
+    assert_valid_path(first.result.path, grid, start, goal, 1e-9)
+    config = RRTStarConfig(iterations=300, time_budget=None)
+    search = grow_rrt_star(start, goal, grid, config, np.random.default_rng(0))
+    assert search.history[0][0] == 0
+    assert search.result.length_m <= first.result.length_m
+
+
 def test_minimum_turning_radius_is_respected(arena: OccupancyGrid) -> None:
     config = RRTStarConfig(iterations=400, time_budget=None, min_turning_radius=0.3)
     search = grow_rrt_star(START, GOAL, arena, config, np.random.default_rng(1))
