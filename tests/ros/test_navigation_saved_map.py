@@ -52,7 +52,10 @@ def _go(
 
             wait_for(finished, timeout, f"goal ({x}, {y})")
             localisation = "" if watch is None else _localisation_errors(watch)
-            assert any(m.startswith("reached:") for m in status.messages[done:]), (localisation, status.messages[done:][-4:])
+            assert any(m.startswith("reached:") for m in status.messages[done:]), (
+                localisation,
+                status.messages[done:][-4:],
+            )
             _, tx, ty = truth.last()  # type: ignore[misc]
             assert math.hypot(tx - x, ty - y) <= 0.3
     finally:
