@@ -141,7 +141,8 @@ def saved_map_navigation_section(world: World, grid: OccupancyGrid, seeds: int, 
         + f"\n\nWrong initial pose (robot at ({WRONG_POSE_START.x:g}, {WRONG_POSE_START.y:g}), the filter told "
         + f"the mapping start ({MAPPING_START.x:g}, {MAPPING_START.y:g})): "
         + "; ".join(f"{n}x {what}" for what, n in outcomes.items())
-        + f". Reached away from the goal: **{false_success}**.\n"
+        + f". Reached away from the goal: {false_success} of {seeds} (target none: "
+        + f"**{'FAIL' if false_success else 'PASS'}**).\n"
     )
 
 
