@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from mrs_nav.geometry import Pose2D, wrap_angle
+from mrs_nav.sim.commands import Twist2D
 from mrs_nav.sim.scripted_drive import OFFICE_CORRIDOR_LOOP, WaypointDriver
 from tests.rosharness import wait_for
 
@@ -16,12 +17,28 @@ COMMAND_PERIOD = 0.1  # s of sim time between commands, the simulator's lockstep
 _SLACK = 1e-6  # s
 
 
+class Spin:
+    """A driver for :class:`Drive` that turns in place, counter-clockwise at ``rate`` rad/s."""
+
+    def __init__(self, rate: float) -> None:
+        self.rate = rate
+
+    def command(self, pose: Pose2D) -> Twist2D:
+        return Twist2D(0.0, self.rate)
+
+
 class Drive:
-    """Drives ``waypoints`` (by default the office's corridor loop) from /ground_truth/odom, a command every
-    0.1 s of sim time while ``on``, and pairs each /amcl_pose with the true pose of the same stamp."""
+    """Drives ``waypoints`` (by default the office's corridor loop; or ``driver``'s commands) from
+    /ground_truth/odom, a command every 0.1 s of sim time while ``on``, and pairs each /amcl_pose with the true
+    pose of the same stamp."""
 
     def __init__(
-        self, rospy: Any, waypoints: tuple[tuple[float, float], ...] = OFFICE_CORRIDOR_LOOP, *, loop: bool = True
+        self,
+        rospy: Any,
+        waypoints: tuple[tuple[float, float], ...] = OFFICE_CORRIDOR_LOOP,
+        *,
+        loop: bool = True,
+        driver: Spin | None = None,
     ) -> None:
         from geometry_msgs.msg import PoseWithCovarianceStamped, Twist
         from nav_msgs.msg import Odometry
@@ -31,7 +48,7 @@ class Drive:
 
         self.rospy, self.pose_from_msg, self.Twist = rospy, pose_from_msg, Twist
         self.lock = threading.Lock()
-        self.driver = WaypointDriver(waypoints, loop=loop)
+        self.driver: WaypointDriver | Spin = driver or WaypointDriver(waypoints, loop=loop)
         self.on = False
         self.next_command = 0.0
         self.now = 0.0

@@ -52,7 +52,10 @@ def _go(
 
             wait_for(finished, timeout, f"goal ({x}, {y})")
             localisation = "" if watch is None else _localisation_errors(watch)
-            assert any(m.startswith("reached:") for m in status.messages[done:]), (localisation, status.messages[done:])
+            assert any(m.startswith("reached:") for m in status.messages[done:]), (
+                localisation,
+                status.messages[done:][-4:],
+            )
             _, tx, ty = truth.last()  # type: ignore[misc]
             assert math.hypot(tx - x, ty - y) <= 0.3
     finally:
@@ -71,22 +74,29 @@ def _localisation_errors(watch: Drive) -> str:
     )
 
 
-# Known failure, left visible (issue 38): since this day's merges the third goal, (-7, -1) in a room beside the
-# mapping drive, is reached by the estimate with the robot 0.33-0.51 m from it (5 of 5 runs, at load 2 and at
-# load 15). Bisected by hand (one run each): passes at 5e2c716, 4314878, 47c2ded and 028c205, fails at 830bd5c: the
-# merge of the TurtleBot3 launch composition (818449c) brings it; the previous localisation filter (0.34 m) and a
-# 0.5 s command watchdog (0.44 m) on today's code do not cure it. Until its cause is found this test reports
-# XFAIL/XPASS instead of blocking every other change; `bench localisation`'s saved-map section is the measured
-# figure meanwhile.
-@pytest.mark.xfail(reason="issue 38: the saved-map run ends 0.33-0.51 m from its third goal; cause not found yet")
+# Failed from 27 Nov until issue 38's fix (third goal reached by the estimate with the robot 0.33-0.55 m off, the
+# first 1.6 m off at load 7), for two reasons found by recording the runs: the drive began before the SLAM node
+# had started (the map then began metres down the corridor and lacked the western rooms' glimpses), and the
+# localisation's fixed middle score for beams ending in unknown cells pulled the estimate towards the known part
+# of the map: along the west corridor beyond it the estimate fell 0.35 m behind the robot while the cloud stayed
+# narrow (mrs_nav.localisation.likelihood_field says how unknown beams score now).
 def test_slam_then_saved_map_then_goals_in_other_rooms(ros_master: RosMaster, rospy_node: Any, tmp_path: Path) -> None:
     rospy = rospy_node
     saved = tmp_path / "office"
     truth = TruthTrack(rospy, "office.world")
     try:
+        from nav_msgs.msg import OccupancyGrid
+
+        maps: list[Any] = []
+        map_sub = rospy.Subscriber("/map", OccupancyGrid, maps.append, queue_size=1)
         # 4x real time, not lockstep: the test's 10 Hz commands keep up and SLAM sees every scan
         with ros_master.launch("slam.launch", "real_time_factor:=4", *OFFICE) as proc:
-            wait_for(lambda: proc.poll() is not None or rospy.get_time() > 1.0, 60.0, "the simulation")
+            # The drive starts once SLAM has taken its first scan (it publishes /map at once), not as soon as the
+            # simulator's clock runs: the SLAM node's start-up takes seconds more than the simulator's on a
+            # loaded machine, at 4x real time a drive of metres, and a map begun metres down the corridor lacks
+            # the start and the glimpses into the western rooms the goals are in (the robot was then lost there).
+            wait_for(lambda: proc.poll() is not None or bool(maps), 120.0, "the SLAM node's first map")
+            map_sub.unregister()
             assert proc.poll() is None, "roslaunch exited"
             drive = Drive(rospy, MAPPING_DRIVE, loop=False)
             try:
@@ -98,7 +108,7 @@ def test_slam_then_saved_map_then_goals_in_other_rooms(ros_master: RosMaster, ro
                 env=ros_master.env,
                 capture_output=True,
                 text=True,
-                timeout=60,
+                timeout=150,  # a Python node starting took 25 s at load 14 with two CPU hogs beside it
                 check=False,
             )
             assert result.returncode == 0, result.stderr

@@ -28,6 +28,8 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
+from mrs_nav.bench.localisation_saved_map import saved_office_map
+from mrs_nav.bench.navigation_saved_map import saved_map_navigation_section
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.fields.path_simplification import simplify_path
 from mrs_nav.geometry import FloatArray, Pose2D, wrap_angle
@@ -84,6 +86,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=optional_runs_option,
         default=10,
         help="seeds of the arena box put in the way (0 = none)",
+    )
+    parser.add_argument(
+        "--saved-map-seeds",
+        type=optional_runs_option,
+        default=20,
+        help="seeds per start on the office's saved map, and of the wrong initial pose (0 = none; issue 38)",
     )
     parser.add_argument(
         "--office-obstacle-seeds",
@@ -187,13 +195,17 @@ def run(args: argparse.Namespace) -> str:
         goals.append(goal_accuracy_section(args.accuracy_seeds, args.time_budget))
     if args.obstacle_seeds or args.office_obstacle_seeds:
         goals.append(obstacle_section(args.obstacle_seeds, args.office_obstacle_seeds, args.time_budget))
+    if args.saved_map_seeds:
+        world = load_world(WORLDS_DIR / "office.world")
+        grid = saved_office_map(world)
+        goals.append(saved_map_navigation_section(world, grid, args.saved_map_seeds, args.time_budget))
     ros = ros_section(names, args.ros_runs) if args.ros_runs else ""
     return "\n\n".join(part for part in (stack, *goals, ros) if part)
 
 
 def _world_names(args: argparse.Namespace) -> list[str]:
     """The worlds of ``--worlds``, after checking every count option is >= 0."""
-    for option in ("seeds", "ros_runs", "accuracy_seeds", "obstacle_seeds", "office_obstacle_seeds"):
+    for option in ("seeds", "ros_runs", "accuracy_seeds", "obstacle_seeds", "office_obstacle_seeds", "saved_map_seeds"):
         if getattr(args, option) < 0:
             raise InvalidInputError(f"--{option.replace('_', '-')} must be >= 0, got {getattr(args, option)}")
     names = [n.strip() for n in args.worlds.split(",") if n.strip()]

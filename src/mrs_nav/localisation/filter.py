@@ -364,9 +364,9 @@ class ParticleFilter:
         c, s = (v[:, None] for v in cos_sin(p[:, 2]))
         xs = p[:, 0, None] + c * ex - s * ey
         ys = p[:, 1, None] + s * ex + c * ey
-        beams, fit_beams = model.log_likelihood(xs, ys, self._sigma(), self.config.laser_sigma_hit)
-        log_p = beams.sum(axis=1)
         prior = self._log_weights - logsumexp(self._log_weights)
+        beams, fit_beams = model.log_likelihood(xs, ys, np.exp(prior), self._sigma(), self.config.laser_sigma_hit)
+        log_p = beams.sum(axis=1) - model.pose_cost(p[:, 0], p[:, 1])
         fit = math.exp(float(logsumexp(prior + fit_beams.sum(axis=1))) / ex.size)
         self._log_weights = prior + self._temper(prior, log_p) * log_p
         cfg = self.config
