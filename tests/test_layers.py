@@ -23,6 +23,7 @@ RANKS: dict[str, int] = {
     "atomic_write": 1,
     "jit": 1,
     "clock_jump": 1,
+    "master_restart": 1,  # when a node registers again with a restarted roscore (the rule)
     "planning": 2,
     "motion_model": 2,
     "options": 2,

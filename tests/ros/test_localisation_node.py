@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from mrs_nav.bag.io import bag_topics
-from mrs_nav.bag.topics import LOCALISATION_TOPICS
+from mrs_nav.bag.topics import LOCALISATION_TOPICS, RECORDED_TOPICS
 from mrs_nav.geometry import Pose2D, wrap_angle
 from mrs_nav.maps.map_io import save_map
 from mrs_nav.maps.rasterize import rasterize_world
@@ -258,12 +258,15 @@ def test_a_kidnapped_robot_is_found_again_within_60_s_and_60_updates(office_loca
     assert worst > 1.0  # the estimate was lost in between: the teleport was not followed by odometry
 
 
-def test_record_launch_records_the_localisation(
+def test_record_launch_records_the_localisation_when_asked(
     office_localisation: tuple[Any, Drive], ros_master: RosMaster, tmp_path: Path
 ) -> None:
+    """record.launch records what the robot sensed (so the bag plays into a live stack); the localisation's outputs
+    are recorded when its ``topics`` argument names them too, for looking at a session afterwards."""
     _, drive = office_localisation
     bag = tmp_path / "session.bag"
-    with ros_master.launch("record.launch", f"bag:={bag}", name="record-localisation"):
+    topics = " ".join([*RECORDED_TOPICS, *LOCALISATION_TOPICS])
+    with ros_master.launch("record.launch", f"bag:={bag}", f"topics:={topics}", name="record-localisation"):
         wait_for(Path(f"{bag}.active").is_file, 30.0, "rosbag record")
         t0 = drive.now
         wait_for(lambda: drive.since(t0).size > 0 or drive.drive(1.0, 60.0) is not None, 120.0, "an /amcl_pose")
