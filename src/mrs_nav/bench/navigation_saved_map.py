@@ -20,6 +20,7 @@ called reached away from the goal.
 from __future__ import annotations
 
 import math
+import re
 from collections import Counter
 from dataclasses import dataclass
 
@@ -147,5 +148,7 @@ def saved_map_navigation_section(world: World, grid: OccupancyGrid, seeds: int, 
 
 
 def _short(outcome: str) -> str:
-    """An outcome without the numbers that differ run to run, to count alike ones together."""
-    return outcome.split(" (", maxsplit=1)[0]
+    """An outcome without the parenthesised numbers that differ run to run (places, distances, spreads), to
+    count alike ones together and keep the reason: "failed: goal failed: reached by the estimate but the
+    localisation is not confident"."""
+    return re.sub(r" \([^()]*\)", "", outcome)

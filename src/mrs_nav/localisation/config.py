@@ -61,6 +61,9 @@ class LocalisationConfig:
     recovery_alpha_slow: float = _default("recovery_alpha_slow")
     recovery_alpha_fast: float = _default("recovery_alpha_fast")
     recovery_radius: float = _default("recovery_radius")
+    refute_updates: int = _default("refute_updates")
+    refute_margin: float = _default("refute_margin")
+    refute_sigma: float = _default("refute_sigma")
     confident_max_sd_xy: float = _default("confident_max_sd_xy")
     confident_max_sd_yaw: float = _default("confident_max_sd_yaw")
     initial_pose_x: float = _default("initial_pose_x")
@@ -91,7 +94,7 @@ class LocalisationConfig:
         for name in ("odom_alpha1", "odom_alpha2", "odom_alpha3", "odom_alpha4"):
             if not 0.0 <= getattr(self, name) <= MAX_ALPHA:
                 raise InvalidInputError(f"{name}: must lie in [0, {MAX_ALPHA:g}], got {getattr(self, name):.3g}")
-        for name in ("kld_err", "laser_sigma_hit", "laser_sigma_max"):
+        for name in ("kld_err", "laser_sigma_hit", "laser_sigma_max", "refute_sigma"):
             if getattr(self, name) <= 0.0:
                 raise InvalidInputError(f"{name}: must be > 0, got {getattr(self, name)}")
         for name, low, high in (
@@ -112,6 +115,7 @@ class LocalisationConfig:
             "initial_cov_yy",
             "initial_cov_aa",
             "recovery_radius",
+            "refute_margin",
             "confident_max_sd_xy",
             "confident_max_sd_yaw",
         )
@@ -126,6 +130,8 @@ class LocalisationConfig:
             raise InvalidInputError(f"kld_z: must lie in (0, 1), got {self.kld_z}")
         if not (0.0 <= self.recovery_alpha_slow <= 1.0 and 0.0 <= self.recovery_alpha_fast <= 1.0):
             raise InvalidInputError("recovery_alpha_slow/recovery_alpha_fast: must lie in [0, 1]")
+        if self.refute_updates < 0:
+            raise InvalidInputError(f"refute_updates: must be >= 0, got {self.refute_updates}")
         if self.resample_interval < 1:
             raise InvalidInputError(f"resample_interval: must be >= 1, got {self.resample_interval}")
 

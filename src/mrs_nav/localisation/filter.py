@@ -22,6 +22,7 @@ does not depend on how many beams were used. All steps are numpy over the whole 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -33,6 +34,7 @@ from scipy.stats import norm
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D, cos_sin, format_point, wrap_angle, wrap_angles
 from mrs_nav.localisation.config import LocalisationConfig
+from mrs_nav.localisation.global_match import GlobalMatch
 from mrs_nav.localisation.likelihood_field import LikelihoodField
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.motion_model import OdometryNoise, decompose
@@ -121,6 +123,10 @@ class ParticleFilter:
             raise InvalidInputError("localisation needs a map with at least one free cell")
         self._fields: dict[float, LikelihoodField] = {}
         self._given = False  # the cloud is a given pose (set_pose) not yet confirmed or refuted by the scans
+        self._match: GlobalMatch | None = None  # built on the first pose to check (the grid costs some MB)
+        self._to_check = 0  # updates left in which a given pose is checked against the whole map
+        self._misfits = 0  # consecutive checked updates whose scan fits elsewhere far better
+        self._refuted = False
         self._last_odom: Pose2D | None = None
         self._updates = 0
         self._w_slow = 0.0
@@ -171,6 +177,7 @@ class ParticleFilter:
         particles[:, 2] = wrap_angles(particles[:, 2])
         self._given = True
         self._reset(particles)
+        self._to_check, self._refuted = self.config.refute_updates, False
 
     def global_localisation(self) -> None:
         """Spread ``max_particles`` uniformly over the map's free space (AMCL's ``global_localization``)."""
@@ -190,6 +197,7 @@ class ParticleFilter:
         self._last_odom = None
         self._force_update = True
         self._w_slow = self._w_fast = 0.0
+        self._to_check = self._misfits = 0
 
     def _recovery_poses(self, count: int) -> FloatArray:
         """Random poses for recovery: within ``recovery_radius`` of a confident estimate (the robot slipped or
@@ -256,6 +264,13 @@ class ParticleFilter:
             return 0.0
         return max(0.0, 1.0 - self._w_fast / self._w_slow)
 
+    @property
+    def refuted(self) -> bool:
+        """Whether the last pose given by :meth:`set_pose` was refuted by the scans (they fit somewhere else in
+        the map far better, :mod:`.global_match`): the filter then spread its particles over the map's free space
+        as :meth:`global_localisation` does. Cleared by the next :meth:`set_pose`."""
+        return self._refuted
+
     def estimate(self) -> PoseEstimate:
         """The pose estimate after the last update (or reset): the weighted mean and covariance of the dominant
         cluster, never the mean of two. It is ``confident`` when its standard deviations are within
@@ -307,6 +322,14 @@ class ParticleFilter:
         # A given pose counts as confident until the scans confirm it (then the rule alone holds) or refute it.
         confident = confirmed or (self._given and narrow and fits)
         self._given &= fits and not confirmed
+        if not confident:
+            # The cluster's spread claims too much of a belief that is not in it: report the whole cloud's spread
+            # about the estimate, which navigation reads (/amcl_pose) against its own bounds (issue 38: a global
+            # spread whose heaviest mode held 42 % of the weight was reported 0.05 m wide, and a goal was taken
+            # as reached by it 12 m from the robot).
+            d = p - mean
+            d[:, 2] = wrap_angles(d[:, 2])
+            cov = (d * w[:, None]).T @ d
         return PoseEstimate(Pose2D(float(mean[0]), float(mean[1]), wrap_angle(mean_yaw)), cov, share, confident)
 
     # -- updating -----------------------------------------------------------------------------------------------
@@ -339,7 +362,32 @@ class ParticleFilter:
         if self._updates % c.resample_interval == 0:
             self._resample()
         self._estimate = self._compute_estimate()
+        if self._to_check:
+            self._check_given_pose(scan)
         return True
+
+    def _check_given_pose(self, scan: BeamScan) -> None:
+        """One of the first ``refute_updates`` updates after :meth:`set_pose`: a scan that fits near the belief as
+        well as anywhere ends the checks; ``refute_updates`` in a row that fit elsewhere by more than
+        ``refute_margin`` refute the pose and start a global localisation. Until then the estimate is not
+        confident: the user's word stands against one odd scan, not against the map."""
+        c = self.config
+        ex, ey = self._beams(scan)
+        if ex.size == 0:
+            return
+        if self._match is None:
+            self._match = GlobalMatch(self._field(scan.range_max), self._free_cells)
+        margin = self._match.margin(self._estimate.pose, self.particles, ex, ey, c.refute_sigma)
+        if margin <= c.refute_margin:
+            self._to_check = self._misfits = 0
+            return
+        self._to_check -= 1
+        self._misfits += 1
+        if self._misfits >= c.refute_updates:
+            self.global_localisation()
+            self._refuted = True
+        else:
+            self._estimate = dataclasses.replace(self._estimate, confident=False)
 
     def _beams(self, scan: BeamScan) -> tuple[FloatArray, FloatArray]:
         """Endpoints (x, y) in the robot's base frame of up to ``laser_max_beams`` evenly spaced valid beams."""

@@ -88,6 +88,15 @@ class LikelihoodField:
         perfect = float(self.log_p(np.array(0.0), fit_sigma))
         return log_p, np.where(unknown, perfect, fit)
 
+    def mean_log_p(self, xs: FloatArray, ys: FloatArray, sigma: float) -> FloatArray:
+        """Per row, the mean ``log p`` at ``sigma`` of endpoints at ``xs``, ``ys`` (shape ``(poses, beams)``, m in
+        the map frame), those in unknown space or off the map scored as one ``sigma`` off a wall: neither a hit nor
+        a miss, the same at every pose (for comparing poses far apart, see :mod:`.global_match`)."""
+        flat = self._cells(xs, ys)
+        log_p = np.asarray(self._table(sigma).take(flat), dtype=np.float64)
+        middle = float(self.log_p(np.array(sigma), sigma))
+        return np.asarray(np.where(self._unknown.take(flat), middle, log_p).mean(axis=1), dtype=np.float64)
+
     def pose_cost(self, xs: FloatArray, ys: FloatArray) -> FloatArray:
         """``UNKNOWN_POSE_COST`` for each position (m, map frame) in unknown space or off the map, else 0."""
         return np.where(self._unknown.take(self._cells(xs, ys)), UNKNOWN_POSE_COST, 0.0)

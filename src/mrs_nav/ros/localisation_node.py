@@ -217,7 +217,9 @@ class LocalisationNode:
                 pf = self._filter
                 if pf is None or stamp < self._reset_stamp:
                     return
+                was_refuted = pf.refuted
                 updated = pf.update(odom, scan)
+                refuted = pf.refuted and not was_refuted
                 if updated:
                     estimate = pf.estimate()
                     particles = pf.particles.copy()
@@ -237,6 +239,11 @@ class LocalisationNode:
             )
             return
         if updated:
+            if refuted:
+                rospy.logwarn(
+                    "localisation: the given pose is refuted by the scans (they fit elsewhere in the map far better);"
+                    " particles spread over the free space to find the robot"
+                )
             self._report_confidence(estimate)
             self._publish_estimate(estimate, particles, stamp)
         self._save_pose(odom, stamp.to_sec())
