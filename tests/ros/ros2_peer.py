@@ -16,8 +16,9 @@ import threading
 import time
 
 import rclpy
-from geometry_msgs.msg import PoseStamped
+from geometry_msgs.msg import PoseArray, PoseStamped
 from nav2_msgs.action import NavigateToPose
+from nav2_msgs.msg import ParticleCloud
 from nav_msgs.msg import OccupancyGrid, Odometry
 from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
@@ -57,6 +58,14 @@ def summary(msg):
             "resolution": info.resolution,
             "occupied": sum(1 for v in msg.data if v > 50),
         }
+    if isinstance(msg, ParticleCloud):
+        return {
+            "frame": msg.header.frame_id,
+            "xs": [p.pose.position.x for p in msg.particles],
+            "weights": [p.weight for p in msg.particles],
+        }
+    if isinstance(msg, PoseArray):
+        return {"frame": msg.header.frame_id, "xs": [p.position.x for p in msg.poses]}
     if isinstance(msg, TFMessage):
         return {"pairs": sorted([t.header.frame_id, t.child_frame_id] for t in msg.transforms)}
     return {}
@@ -74,6 +83,8 @@ class Peer(Node):
             ("map", OccupancyGrid, LATCHED),
             ("/tf", TFMessage, TF),
             ("/tf_static", TFMessage, LATCHED),
+            ("particlecloud", PoseArray, qos_profile_sensor_data),  # ROS 1 amcl's name and type
+            ("particle_cloud", ParticleCloud, qos_profile_sensor_data),  # Nav2 amcl's
         ]
         for name, cls, qos in topics:
             self.create_subscription(cls, name, lambda m, n=name: self.heard(n, m), qos)

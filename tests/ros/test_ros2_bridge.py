@@ -97,6 +97,34 @@ def test_a_ros2_node_receives_odom_scan_map_and_tf(bridged: dict[str, Any]) -> N
     assert ("base_link", "base_scan") in frames("/tf_static"), frames("/tf_static")
 
 
+def test_a_ros2_node_receives_the_particle_cloud_as_nav2_and_as_ros1_amcl_publish_it(
+    bridged: dict[str, Any],
+) -> None:
+    rospy, peer = bridged["rospy"], bridged["peer"]
+    from geometry_msgs.msg import Pose, PoseArray
+
+    cloud_pub = rospy.Publisher("/particlecloud", PoseArray, queue_size=2)
+    cloud = PoseArray()
+    cloud.header.frame_id = "map"
+    cloud.poses = [Pose() for _ in range(4)]
+    for i, pose in enumerate(cloud.poses):
+        pose.position.x, pose.orientation.w = 0.5 * i, 1.0
+    try:
+
+        def heard() -> bool:
+            cloud.header.stamp = rospy.Time.now()
+            cloud_pub.publish(cloud)  # best effort on ROS 2: sent until both arrive
+            return "particle_cloud" in peer.last and "particlecloud" in peer.last
+
+        wait_for(heard, 30.0, "the cloud on /particle_cloud and /particlecloud", period=0.2)
+    finally:
+        cloud_pub.unregister()
+    nav2, poses = peer.last["particle_cloud"], peer.last["particlecloud"]
+    assert nav2["frame"] == poses["frame"] == "map"
+    assert nav2["xs"] == poses["xs"] == [0.0, 0.5, 1.0, 1.5]
+    assert nav2["weights"] == pytest.approx([0.25] * 4)
+
+
 def test_a_goal_is_refused_when_not_allowed(bridged: dict[str, Any]) -> None:
     rospy, closed, truth = bridged["rospy"], bridged["closed"], bridged["truth"]
     from geometry_msgs.msg import PoseStamped

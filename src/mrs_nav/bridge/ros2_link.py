@@ -28,6 +28,7 @@ from mrs_nav.config_files import node_defaults
 from mrs_nav.errors import InvalidInputError
 
 FRAME_HEADER = struct.Struct("<HI")
+PARTICLE_CLOUD = "nav2_msgs/ParticleCloud"
 #: Larger frames are refused: a map of 4000 x 4000 cells is 16 MB.
 MAX_FRAME_BYTES = 64 * 1024 * 1024
 #: The discovery ranges ROS 2 accepts in ROS_AUTOMATIC_DISCOVERY_RANGE (the default, SUBNET, is not offered).
@@ -48,9 +49,10 @@ class Qos(enum.Enum):
 @dataclass(frozen=True)
 class Route:
     """One bridged topic: its ROS 1 and ROS 2 names (before the namespace), its type (``pkg/Name``, the same
-    on both sides), the QoS, whether it runs ROS 2 -> ROS 1, and whether the robot's namespace applies to its
-    names (not to /tf and /tf_static, which several robots share with their frames prefixed: a namespaced
-    bridge sends on only the transforms whose child frame carries its namespace)."""
+    on both sides unless ``ros2_type`` names the one the ROS 2 half converts it to), the QoS, whether it runs
+    ROS 2 -> ROS 1, and whether the robot's namespace applies to its names (not to /tf and /tf_static, which
+    several robots share with their frames prefixed: a namespaced bridge sends on only the transforms whose
+    child frame carries its namespace)."""
 
     ros1: str
     ros2: str
@@ -58,10 +60,18 @@ class Route:
     qos: Qos
     inbound: bool = False
     namespaced: bool = True
+    ros2_type: str = ""
+
+    @property
+    def published_type(self) -> str:
+        """The type on the ROS 2 side."""
+        return self.ros2_type or self.type
 
 
-#: ROS 1 -> ROS 2. tf2_msgs/TFMessage is not among the ROS 2 wheels: the install step generates it
-#: (tools/install_ros2.sh).
+#: ROS 1 -> ROS 2. tf2_msgs/TFMessage and nav2_msgs are not among the ROS 2 wheels: the install step generates
+#: them (tools/install_ros2.sh). The particle cloud goes out twice: as ROS 1's amcl names it (a PoseArray, for
+#: rviz2's PoseArray display) and as Nav2's amcl does (/particle_cloud, nav2_msgs/ParticleCloud, for Nav2's
+#: rviz2 plugin and tools written against Nav2).
 OUTBOUND: tuple[Route, ...] = (
     Route("/scan", "/scan", "sensor_msgs/LaserScan", Qos.SENSOR),
     Route("/odom", "/odom", "nav_msgs/Odometry", Qos.RELIABLE),
@@ -74,6 +84,7 @@ OUTBOUND: tuple[Route, ...] = (
         Qos.LATCHED,
     ),
     Route("/particlecloud", "/particlecloud", "geometry_msgs/PoseArray", Qos.SENSOR),
+    Route("/particlecloud", "/particle_cloud", "geometry_msgs/PoseArray", Qos.SENSOR, ros2_type=PARTICLE_CLOUD),
     Route("/tf", "/tf", "tf2_msgs/TFMessage", Qos.TF, namespaced=False),
     Route("/tf_static", "/tf_static", "tf2_msgs/TFMessage", Qos.TF_STATIC, namespaced=False),
 )

@@ -20,6 +20,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profi
 from mrs_nav.bridge.ros2_action import ACTION_CHANNEL, ACTION_NAME
 from mrs_nav.bridge.ros2_link import Qos, Ros2BridgeConfig, Route, encode_frame, read_frame
 from mrs_nav.errors import MrsNavError
+from mrs_nav.ros2.conversions import CONVERSIONS
 from mrs_nav.ros2.messages import codec, message_class
 from mrs_nav.ros2.navigate_to_pose import NavigateToPoseServer
 from mrs_nav.ros2.runtime import spinning_node
@@ -77,7 +78,7 @@ class BridgeHalf:
         self._static: dict[str, Any] = {}  # child frame -> its latest static transform
         for channel, route in enumerate(self.routes):
             topic = config.ros2_topic(route)
-            cls = message_class(route.type)
+            cls = message_class(route.published_type)
             if route.inbound:
                 node.create_subscription(
                     cls, topic, lambda m, c=channel, r=route: self._to_ros1(c, r, m), QOS[route.qos]
@@ -110,6 +111,8 @@ class BridgeHalf:
             msg = self._transforms(route, msg)
             if msg is None:
                 return
+        if route.ros2_type:
+            msg = CONVERSIONS[route.ros2_type](msg)
         publisher.publish(msg)
 
     def _transforms(self, route: Route, msg: Any) -> Any:
