@@ -84,9 +84,11 @@ def _fsync_folder(folder: Path) -> None:
 
 
 def check_not_inputs(outputs: Iterable[tuple[str, Path]], inputs: Iterable[tuple[str, Path]]) -> None:
-    """Refuse (with :class:`OutputFileError`, before any work) an output that is one of the command's inputs:
-    the same file (inode) or the same resolved path. Each pair is ``(what the user called it, path)``."""
+    """Refuse (with :class:`OutputFileError`, before any work) an output that is one of the command's inputs, or
+    another of its outputs (the later would silently replace the earlier): the same file (inode) or the same
+    resolved path. Each pair is ``(what the user called it, path)``."""
     known = [(what, path, _identity(path)) for what, path in inputs]
+    written: list[tuple[str, Path, tuple[int, int] | None]] = []
     for out_what, out in outputs:
         identity = _identity(out)
         resolved = out.resolve()
@@ -95,6 +97,10 @@ def check_not_inputs(outputs: Iterable[tuple[str, Path]], inputs: Iterable[tuple
                 raise OutputFileError(
                     f"{out_what} {out} is the {in_what} {path}: refusing to overwrite an input of this command"
                 )
+        for other_what, other, other_identity in written:
+            if (identity is not None and identity == other_identity) or resolved == other.resolve():
+                raise OutputFileError(f"{out_what} {out} is the {other_what} {other}: two outputs under one name")
+        written.append((out_what, out, identity))
 
 
 def _identity(path: Path) -> tuple[int, int] | None:

@@ -47,3 +47,11 @@ def test_an_output_that_is_an_input_is_refused(tmp_path):
     for name in ("c.log", "same.bag", "./c.log"):
         with pytest.raises(OutputFileError, match="is the log"):
             check_not_inputs([("bag", tmp_path / name)], [("log", log)])
+
+
+def test_two_outputs_under_one_name_are_refused(tmp_path):
+    out = tmp_path / "out"
+    outputs = [("--out file", out / "metrics.json"), ("--write-golden", tmp_path / "x" / ".." / "out" / "metrics.json")]
+    with pytest.raises(OutputFileError, match=r"--write-golden .* is the --out file .*: two outputs under one name"):
+        check_not_inputs(outputs, [])
+    check_not_inputs([("--out file", out / "metrics.json"), ("--write-golden", out / "g.json")], [])

@@ -15,9 +15,10 @@ from pathlib import Path
 from mrs_nav.atomic_write import write_text
 from mrs_nav.resources import CHECKOUT
 from mrs_nav.tables import markdown_table
+from mrs_nav.textfiles import DESCRIPTION_LIMIT, check_writable, read_text
 
 # markdown_table lives in mrs_nav.tables (batch replays use it too); benchmarks may take it from here.
-__all__ = ["default_results_path", "machine_description", "markdown_table", "write_section"]
+__all__ = ["default_results_path", "machine_description", "markdown_table", "results_path", "write_section"]
 
 _HEADER = (
     "# mrs_nav benchmark results\n\n"
@@ -52,11 +53,26 @@ def default_results_path() -> Path:
     return Path.cwd() / "bench" / "RESULTS.md"
 
 
+def results_path(path: Path | None = None) -> Path:
+    """The results file to update (``path``, else :func:`default_results_path`), checked before a benchmark
+    runs: a folder, a device, an unreadable file or a folder that cannot be written is refused now, with one
+    line, not after the measuring."""
+    path = path or default_results_path()
+    check_writable(path, "--results")
+    _previous(path)
+    return path
+
+
+def _previous(path: Path) -> str:
+    """The results written so far (a regular file read as text, never a device read without end)."""
+    return read_text(path, DESCRIPTION_LIMIT, "benchmark results") if path.exists() else _HEADER
+
+
 def write_section(name: str, body: str, path: Path | None = None) -> Path:
     """Replace (or append) the section of benchmark ``name`` with ``body``, stamped with date and machine."""
     path = path or default_results_path()
     path.parent.mkdir(parents=True, exist_ok=True)
-    text = path.read_text(encoding="utf-8") if path.exists() else _HEADER
+    text = _previous(path)
     stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
     section = (
         f"<!-- bench:{name} -->\n## {name}\n\n"

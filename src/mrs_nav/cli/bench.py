@@ -11,7 +11,7 @@ import importlib
 from pathlib import Path
 from typing import Any
 
-from mrs_nav.bench.results import write_section
+from mrs_nav.bench.results import results_path, write_section
 
 # benchmark name on the command line -> module under mrs_nav.bench
 BENCHMARKS = {
@@ -66,10 +66,11 @@ def register(subparsers: Any) -> None:
 
 def _runner(name: str, module: Any) -> Any:
     def run(args: argparse.Namespace) -> int:
+        results = None if args.no_write else results_path(args.results)  # refused before, not after, the run
         body: str = module.run(args)
         print(body)
-        if not args.no_write:
-            path = write_section(name, body, args.results)
+        if results is not None:
+            path = write_section(name, body, results)
             print(f"written to {path}")
         return 0
 

@@ -24,6 +24,7 @@ from mrs_nav.fields.randomized_potential_field import EscapeSettings, plan_poten
 from mrs_nav.geometry import Pose2D
 from mrs_nav.limits import MAX_ITERATIONS, MAX_ROBOT_RADIUS_M, MAX_SEED, MAX_SIZE_M
 from mrs_nav.maps.admissible import obstacles_refusal
+from mrs_nav.maps.map_io import map_image
 from mrs_nav.maps.obstacles import Obstacles
 from mrs_nav.maps.world import load_world
 from mrs_nav.options import count_option, number_option, parse_floats, radius_option, seed_option
@@ -144,7 +145,10 @@ def check_png(args: argparse.Namespace) -> None:
         raise InvalidInputError(f"--png {png}: the file name must end in .png (the figure is a PNG image)")
     final_target(png, "--png")
     check_writable(png, "--png")
-    named = (("--world", args.world), ("--map", getattr(args, "map", None)), ("--circles", Path(args.circles or "")))
+    map_path: Path | None = getattr(args, "map", None)
+    named = [("--world", args.world), ("--map", map_path), ("--circles", Path(args.circles or ""))]
+    if map_path is not None and map_path.is_file():
+        named.append(("--map's image", map_image(map_path)))
     check_not_inputs([("--png", png)], [(what, path) for what, path in named if path is not None and path.is_file()])
 
 

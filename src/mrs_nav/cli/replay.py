@@ -241,7 +241,8 @@ def _run_batch(args: argparse.Namespace) -> int:
         print_json(report)
     else:
         print(table, end="")
-    verdicts = [o.verdict for o in outcomes]
-    if "error" in verdicts:
-        return 1
-    return 2 if "regressed" in verdicts else 0
+    failed = [o for o in outcomes if o.error is not None]
+    if failed:  # the report has them all; the one line says which and why, as a single bag's failure would
+        reasons = "; ".join(f"{o.name}: {o.error}" for o in failed)
+        return fail(f"{len(failed)} of {len(outcomes)} bags failed ({reasons}); the report is in {args.out}")
+    return 2 if any(o.regressions for o in outcomes) else 0

@@ -134,6 +134,20 @@ def read_pgm(path: Path) -> npt.NDArray[np.int32]:
     return pixels.reshape(height, width)
 
 
+def map_image(path: Path) -> Path:
+    """The image file the map description at ``path`` names (an input of whatever reads the map)."""
+    return _image_path(_parse_yaml(path), path)
+
+
+def _image_path(meta: dict[str, Any], path: Path) -> Path:
+    image = meta.get("image")
+    if not isinstance(image, str) or not image:
+        raise MapFileError(f"{path}: missing or empty key 'image'")
+    if "\0" in image:  # no file name holds one; the OS would refuse the path with a bare ValueError
+        raise MapFileError(f"{path}: key 'image' holds a NUL byte")
+    return Path(image) if Path(image).is_absolute() else path.parent / image
+
+
 def _parse_yaml(path: Path) -> dict[str, Any]:
     meta = load_yaml(read_text(path, _MAX_YAML_BYTES, "map description", MapFileError), str(path), MapFileError)
     if not isinstance(meta, dict):
@@ -145,11 +159,7 @@ def load_map(path: str | Path) -> OccupancyGrid:
     """Load a map_server map from its ``.yaml`` file; errors name the file."""
     path = Path(path)
     meta = _parse_yaml(path)
-    image = meta.get("image")
-    if not isinstance(image, str) or not image:
-        raise MapFileError(f"{path}: missing or empty key 'image'")
-    if "\0" in image:  # no file name holds one; the OS would refuse the path with a bare ValueError
-        raise MapFileError(f"{path}: key 'image' holds a NUL byte")
+    image_path = _image_path(meta, path)
     resolution = _number(meta, "resolution", path)
     origin = meta.get("origin")
     if (
@@ -171,7 +181,6 @@ def load_map(path: str | Path) -> OccupancyGrid:
     mode = meta.get("mode", "trinary")
     if mode not in _MODES:
         raise MapFileError(f"{path}: mode must be one of {', '.join(_MODES)}, got {mode!r}")
-    image_path = Path(image) if Path(image).is_absolute() else path.parent / image
     pixels = read_pgm(image_path)[::-1]  # image top row is the largest y; grid row 0 is the smallest
     if mode == "raw":
         values = np.where(pixels > OCCUPIED, UNKNOWN, pixels)
