@@ -51,7 +51,7 @@ ROS1_ONLY_FIELDS: dict[str, tuple[tuple[str, str], ...]] = {"std_msgs/Header": (
 _SEQUENCE = re.compile(r"^sequence<(?P<item>[^,>]+)(?:,\s*\d+)?>$")
 _FIXED = re.compile(r"^(?P<item>[^\[]+)\[(?P<size>\d+)\]$")
 _BOUNDED_STRING = re.compile(r"^w?string<\d+>$")
-_LENGTH = struct.Struct("<I")
+LENGTH = struct.Struct("<I")
 _LITTLE = sys.byteorder == "little"
 
 #: A type name -> its fields in wire order, as ROS 2 describes them.
@@ -60,7 +60,12 @@ FieldsOf = Callable[[str], Mapping[str, str]]
 Build = Callable[[str, dict[str, Any]], Any]
 
 
-def _item_and_size(field_type: str) -> tuple[str, int | None] | None:
+def is_string(field_type: str) -> bool:
+    """``string`` or a bounded string (``string<n>``, ``wstring<n>``)."""
+    return field_type == "string" or _BOUNDED_STRING.match(field_type) is not None
+
+
+def item_and_size(field_type: str) -> tuple[str, int | None] | None:
     """``sequence<T>`` -> (T, None); ``T[n]`` -> (T, n); anything else None."""
     match = _SEQUENCE.match(field_type)
     if match:
@@ -111,8 +116,8 @@ def _make_plan(fields: tuple[tuple[str, str], ...], ros1_only: int) -> tuple[_Op
             run.append((kept, PRIMITIVES[field_type][0]))
             continue
         close_run()
-        array_of = _item_and_size(field_type)
-        if field_type == "string" or _BOUNDED_STRING.match(field_type):
+        array_of = item_and_size(field_type)
+        if is_string(field_type):
             plan.append(_Op(_Step.STRING, (name,)))
         elif array_of is not None:
             item, size = array_of
@@ -193,7 +198,7 @@ class Ros1Codec:
                 continue
             count = op.size
             if count is None or op.step is _Step.STRING:
-                (count,) = _LENGTH.unpack_from(view, pos)
+                (count,) = LENGTH.unpack_from(view, pos)
                 pos += 4
             if op.step is _Step.STRING:
                 values[name] = bytes(_take(view, pos, count)).decode()
@@ -225,16 +230,16 @@ class Ros1Codec:
         if primitive is not None:
             out += struct.pack("<" + primitive[0], value)
             return
-        if field_type == "string" or _BOUNDED_STRING.match(field_type):
+        if is_string(field_type):
             encoded = str(value).encode()
-            out += _LENGTH.pack(len(encoded)) + encoded
+            out += LENGTH.pack(len(encoded)) + encoded
             return
-        array_of = _item_and_size(field_type)
+        array_of = item_and_size(field_type)
         if array_of is not None:
             item, size = array_of
             items = list(value)
             if size is None:
-                out += _LENGTH.pack(len(items))
+                out += LENGTH.pack(len(items))
             elif len(items) != size:
                 raise ValueError(f"{field_type} needs {size} items, got {len(items)}")
             if item in PRIMITIVES:

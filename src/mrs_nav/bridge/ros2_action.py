@@ -42,7 +42,8 @@ SPEED_WINDOW = 1.0
 MIN_SPEED = 0.01
 MIN_DISTANCE = 0.1
 
-# nav2_msgs/action/NavigateToPose result error codes (Jazzy)
+# nav2_msgs/action/NavigateToPose result error codes: Jazzy's action defines NONE only (its bt_navigator passes
+# on the failing task's code); 9000 is the code Nav2's releases after Jazzy name UNKNOWN.
 ERROR_NONE = 0
 ERROR_UNKNOWN = 9000
 

@@ -17,11 +17,12 @@ from typing import IO, Any
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 
+from mrs_nav.bridge.ros1_cdr import Ros1ToCdr
 from mrs_nav.bridge.ros2_action import ACTION_CHANNEL, ACTION_NAME
 from mrs_nav.bridge.ros2_link import Qos, Ros2BridgeConfig, Route, encode_frame, read_frame
 from mrs_nav.errors import MrsNavError
 from mrs_nav.ros2.conversions import CONVERSIONS
-from mrs_nav.ros2.messages import codec, message_class
+from mrs_nav.ros2.messages import codec, fields_of, message_class
 from mrs_nav.ros2.navigate_to_pose import NavigateToPoseServer
 from mrs_nav.ros2.runtime import spinning_node
 
@@ -70,6 +71,7 @@ class BridgeHalf:
         self.config = config
         self.node = node
         self.codec = codec()
+        self.cdr = Ros1ToCdr(fields_of)
         self.drops = _Drops()
         self._out = out
         self._out_lock = threading.Lock()
@@ -103,6 +105,9 @@ class BridgeHalf:
             return
         route = self.routes[channel]
         try:
+            if self._as_bytes(route):
+                publisher.publish(self.cdr.transcode(route.type, payload))
+                return
             msg = self.codec.decode(route.type, payload)
         except MrsNavError as err:
             self.drops.drop(route.ros2, str(err))
@@ -114,6 +119,14 @@ class BridgeHalf:
         if route.ros2_type:
             msg = CONVERSIONS[route.ros2_type](msg)
         publisher.publish(msg)
+
+    def _as_bytes(self, route: Route) -> bool:
+        """Whether ``route``'s messages go out as CDR bytes rewritten from ROS 1's (no message object: rclpy
+        publishes bytes as they are): all but those converted to another type and the transforms this half sorts
+        or gathers (a namespaced bridge's /tf, every /tf_static), which are few."""
+        if route.ros2_type:
+            return False
+        return route.qos is not Qos.TF_STATIC and not (route.qos is Qos.TF and self.config.namespace)
 
     def _transforms(self, route: Route, msg: Any) -> Any:
         """The robot's own transforms of a TFMessage (see Ros2BridgeConfig.own_frame), None if none is left.

@@ -8,7 +8,6 @@ from typing import Any
 
 import numpy as np
 import pytest
-from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from mrs_nav.bridge.ros1_codec import Ros1Codec
 from mrs_nav.bridge.ros2_link import (
@@ -67,13 +66,6 @@ FIELDS: dict[str, dict[str, str]] = {
 
 def codec() -> Ros1Codec:
     return Ros1Codec(FIELDS.__getitem__, lambda _type, values: SimpleNamespace(**values))
-
-
-@pytest.fixture(scope="module")
-def store() -> Any:
-    typestore = get_typestore(Stores.ROS1_NOETIC)
-    typestore.register(get_types_from_msg("geometry_msgs/TransformStamped[] transforms", "tf2_msgs/msg/TFMessage"))
-    return typestore
 
 
 def make(store: Any, type_name: str, *args: Any, **kwargs: Any) -> Any:
