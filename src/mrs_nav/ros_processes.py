@@ -203,3 +203,29 @@ def run_peer(proc: subprocess.Popen[bytes], env: dict[str, str], log_dir: Path, 
     if proc.poll() is not None:
         raise RosProcessError(f"roslaunch exited early: {(log_dir / 'launch.log').read_text()[-500:]}")
     return json.loads(out.read_text())
+
+
+def node_pid(uri: str, node: str, timeout: float = 10.0) -> int:
+    """The process id of ``node`` (``/slam``) registered with the master at ``uri`` (its XML-RPC ``getPid``)."""
+    master = xmlrpc.client.ServerProxy(uri, transport=TimeoutTransport(timeout))
+    lookup: Any = master.lookupNode("/mrs_nav_bench", node)
+    if lookup[0] != 1:
+        raise RosProcessError(f"node {node} is not registered with {uri}: {lookup[1]}")
+    reply: Any = xmlrpc.client.ServerProxy(lookup[2], transport=TimeoutTransport(timeout)).getPid("/mrs_nav_bench")
+    if reply[0] != 1:
+        raise RosProcessError(f"node {node} did not give its pid: {reply[1]}")
+    return int(reply[2])
+
+
+def process_usage(pid: int) -> tuple[int, float]:
+    """(resident set size in bytes, CPU seconds in user and kernel mode) of process ``pid``, from Linux /proc."""
+    try:
+        with open(f"/proc/{pid}/statm", encoding="ascii") as statm:
+            rss = int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+        with open(f"/proc/{pid}/stat", encoding="ascii") as stat:
+            # fields after the command name, which is in parentheses and may hold spaces: utime and stime are the
+            # 14th and 15th fields of the line, the 12th and 13th after the closing parenthesis
+            fields = stat.read().rsplit(")", 1)[1].split()
+    except OSError as err:
+        raise RosProcessError(f"process {pid} is gone: {err}") from err
+    return rss, (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")

@@ -1,23 +1,16 @@
 """Sim time going back under running nodes (mrs_nav.ros.clock_jump): during a drive, and between two plays of a
 bag. Every node keeps publishing (map -> odom, /map, /amcl_pose, /cmd_vel) and the next goal is reached.
 
-The jumps are made deterministic by pausing the simulator (SIGSTOP) around one /clock message from this process,
-published as ``rostopic pub -1 /clock`` does: the clock then stays where that message put it for a wall second,
-long enough for every node to see it, instead of racing the simulator's next tick; the simulator then goes on
-from its own time. A message 1 s behind the simulator is a jump back by 1 s (and then forward again); a message
-10 s or 185 s ahead is, when the simulator resumes, a jump back by 10 s or 185 s (185 s: what a simulator restarted
-under the nodes does).
+The jumps are made deterministic by :class:`mrs_nav.ros.clock_jumper.ClockJumper` (the simulator paused around one
+/clock message from this process): an offset of -1 s is a jump back by 1 s, one of 10 s or 185 s a jump back by
+10 s or 185 s when the simulator resumes.
 """
 
 from __future__ import annotations
 
 import math
-import os
-import signal
-import threading
 import time
-import xmlrpc.client
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,6 +18,7 @@ from typing import Any
 
 import pytest
 
+from mrs_nav.ros.clock_jumper import Activity, ClockJumper
 from tests.ros.navharness import StatusLog, TruthTrack
 from tests.ros.test_live_replay import BAGS, _sensor_bag, live_slam, play_bag
 from tests.rosharness import RosMaster, wait_for
@@ -32,86 +26,7 @@ from tests.rosharness import RosMaster, wait_for
 pytestmark = pytest.mark.ros
 
 MAX_RATE = ("real_time_factor:=0", "lockstep:=true")
-HOLD_S = 1.5  # wall s the paused clock stands at the published time: every node's timer and callbacks see it
 GOAL = (1.5, -1.5)  # across the arena's lower side from the start at (-1.5, -1.5)
-
-
-class Activity:
-    """Wall arrival times of what the nodes publish: map -> odom on /tf, /map, /amcl_pose, a moving /cmd_vel."""
-
-    def __init__(self, rospy: Any) -> None:
-        from geometry_msgs.msg import PoseWithCovarianceStamped, Twist
-        from nav_msgs.msg import OccupancyGrid
-        from tf2_msgs.msg import TFMessage
-
-        self._lock = threading.Lock()
-        self.arrivals: dict[str, list[float]] = {"map->odom": [], "/map": [], "/amcl_pose": [], "/cmd_vel": []}
-        self.subs = [
-            rospy.Subscriber("/tf", TFMessage, self._on_tf, queue_size=1000),
-            rospy.Subscriber("/map", OccupancyGrid, self._note("/map"), queue_size=1),
-            rospy.Subscriber("/amcl_pose", PoseWithCovarianceStamped, self._note("/amcl_pose"), queue_size=10),
-            rospy.Subscriber("/cmd_vel", Twist, self._on_cmd_vel, queue_size=100),
-        ]
-
-    def _add(self, what: str) -> None:
-        with self._lock:
-            self.arrivals[what].append(time.monotonic())
-
-    def _note(self, what: str) -> Callable[[Any], None]:
-        return lambda _msg: self._add(what)
-
-    def _on_tf(self, msg: Any) -> None:
-        if any(t.header.frame_id.lstrip("/") == "map" and t.child_frame_id == "odom" for t in msg.transforms):
-            self._add("map->odom")
-
-    def _on_cmd_vel(self, msg: Any) -> None:
-        if msg.linear.x != 0.0 or msg.angular.z != 0.0:
-            self._add("/cmd_vel")
-
-    def since(self, wall: float) -> dict[str, int]:
-        """How many of each arrived after the monotonic wall time ``wall``."""
-        with self._lock:
-            return {what: sum(t > wall for t in times) for what, times in self.arrivals.items()}
-
-    def close(self) -> None:
-        for sub in self.subs:
-            sub.unregister()
-
-
-def _pid(master: RosMaster, node: str) -> int:
-    code, message, uri = xmlrpc.client.ServerProxy(master.uri).lookupNode("/pytest", node)
-    assert code == 1, message
-    code, message, pid = xmlrpc.client.ServerProxy(uri).getPid("/pytest")
-    assert code == 1, message
-    return int(pid)
-
-
-class ClockJumper:
-    """Publishes one /clock message while the simulator is paused (see the module's docstring)."""
-
-    def __init__(self, rospy: Any, master: RosMaster) -> None:
-        from rosgraph_msgs.msg import Clock
-
-        self.rospy, self.master, self.Clock = rospy, master, Clock
-        self.pub = rospy.Publisher("/clock", Clock, queue_size=1)
-
-    def jump(self, offset_s: float) -> float:
-        """Pause the simulator, publish its time plus ``offset_s``, hold it, resume; the monotonic wall time of the
-        resumption."""
-        pid = _pid(self.master, "/simulator")
-        wait_for(lambda: self.pub.get_num_connections() >= 3, 10.0, "the nodes to subscribe this /clock")
-        os.kill(pid, signal.SIGSTOP)
-        try:
-            time.sleep(0.2)  # the simulator's last messages arrive
-            at = self.rospy.get_time() + offset_s
-            self.pub.publish(self.Clock(clock=self.rospy.Time.from_sec(at)))
-            time.sleep(HOLD_S)
-        finally:
-            os.kill(pid, signal.SIGCONT)
-        return time.monotonic()
-
-    def close(self) -> None:
-        self.pub.unregister()
 
 
 @dataclass(frozen=True)
@@ -131,15 +46,13 @@ FIELD = Stack(("potential_field_navigation.launch", "trajectory_file:=none"), "p
 
 
 @contextmanager
-def _subscribers(
-    rospy: Any, master: RosMaster, stack: Stack
-) -> Iterator[tuple[Activity, StatusLog, TruthTrack, ClockJumper, Any]]:
+def _subscribers(rospy: Any, stack: Stack) -> Iterator[tuple[Activity, StatusLog, TruthTrack, ClockJumper, Any]]:
     from geometry_msgs.msg import PoseStamped
 
-    activity = Activity(rospy)
+    activity = Activity()
     status = StatusLog(rospy, f"/{stack.node}/status")
     truth = TruthTrack(rospy, "simple.world")
-    jumper = ClockJumper(rospy, master)
+    jumper = ClockJumper()
     goal_pub = rospy.Publisher("/move_base_simple/goal", PoseStamped, queue_size=1, latch=True)
     try:
         yield activity, status, truth, jumper, goal_pub
@@ -179,7 +92,7 @@ def test_a_clock_jump_during_a_drive_stops_no_node_and_the_next_goal_is_reached(
 ) -> None:
     rospy = rospy_node
     with (
-        _subscribers(rospy, ros_master, stack) as (activity, status, truth, jumper, goal_pub),
+        _subscribers(rospy, stack) as (activity, status, truth, jumper, goal_pub),
         ros_master.launch(*stack.launch, *MAX_RATE, "seed:=5", "x:=-1.5", "y:=-1.5") as proc,
     ):
         wait_for(
@@ -221,7 +134,7 @@ def test_a_bag_played_twice_into_slam_gets_map_to_odom_both_times(
     bag = tmp_path / "sensors.bag"
     _sensor_bag(BAGS / "simple.bag", bag)
     seconds = 12.0  # of the bag per play, at 4x
-    activity = Activity(rospy_node)
+    activity = Activity()
     try:
         with live_slam(ros_master):
             counts = []

@@ -28,8 +28,10 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 import threading
 import time
+from pathlib import Path
 from typing import Any
 
 import rospy
@@ -50,11 +52,13 @@ NAVIGATORS = {
 }
 
 
-def _wait(pred: Any, timeout: float, what: str) -> None:
+def wait_until(pred: Any, timeout: float, what: str) -> None:
+    """Poll ``pred`` until true; after ``timeout`` wall s, exit naming the peer (this module or another that runs
+    as ``python -m``) and ``what`` did not come."""
     deadline = time.monotonic() + timeout
     while not pred():
         if time.monotonic() > deadline:
-            raise SystemExit(f"navigation_bench_peer: no {what} within {timeout:.0f} s")
+            raise SystemExit(f"{Path(sys.argv[0]).stem}: no {what} within {timeout:.0f} s")
         time.sleep(0.01)
 
 
@@ -149,7 +153,7 @@ def _goal_from_action(ready: str | None, timeout: float) -> tuple[float, float]:
     )
     if ready:
         write_text(ready, "ready", "bench peer ready file")
-    _wait(lambda: bool(arrived), timeout, "goal on move_base/goal")
+    wait_until(lambda: bool(arrived), timeout, "goal on move_base/goal")
     sub.unregister()
     return arrived[0]
 
@@ -172,17 +176,17 @@ def main() -> None:
         robots = {"": _Robot("", (args.goal[0], args.goal[1]), args.navigator, obstacles)}
     else:
         robots = {ns: _Robot(f"/{ns}", (float(x), float(y)), args.navigator, obstacles) for ns, x, y in args.robot}
-    _wait(lambda: all(r.ready() for r in robots.values()), 120.0, "map and navigation node")
+    wait_until(lambda: all(r.ready() for r in robots.values()), 120.0, "map and navigation node")
     first_map = rospy.get_time()
-    _wait(lambda: rospy.get_time() > first_map + 3.0, 60.0, "3 s of sim time")
+    wait_until(lambda: rospy.get_time() > first_map + 3.0, 60.0, "3 s of sim time")
     if args.from_action:
         sim0, wall0 = _goal_from_action(args.ready, args.timeout)
     else:
         sim0, wall0 = rospy.get_time(), time.monotonic()
         for robot in robots.values():
             robot.send_goal()
-    _wait(lambda: all(r.outcome is not None for r in robots.values()), args.timeout, "outcome")
-    _wait(lambda: all(r.caught_up() for r in robots.values()), 60.0, "ground truth up to the outcome")
+    wait_until(lambda: all(r.outcome is not None for r in robots.values()), args.timeout, "outcome")
+    wait_until(lambda: all(r.caught_up() for r in robots.values()), 60.0, "ground truth up to the outcome")
     results = {ns: robot.result(sim0, wall0) for ns, robot in robots.items()}
     if args.goal is not None:
         summary: dict[str, Any] = results[""]
