@@ -170,6 +170,11 @@ def roslaunch_command(launch_file: str, world: Path, start: Pose2D, *args: str) 
     ]
 
 
+#: Wall seconds a launched stack may take to publish its first /clock: every node imports numpy, scipy and the
+#: compiled kernels first, which on a loaded 2-core machine took over a minute.
+STARTUP_TIMEOUT_S = 180.0
+
+
 def read_clock(env: dict[str, str], timeout: float = 20.0) -> tuple[float, float]:
     """(sim seconds on /clock, monotonic wall time when it was read), via ``rostopic echo``."""
     try:
@@ -194,7 +199,8 @@ def run_peer(proc: subprocess.Popen[bytes], env: dict[str, str], log_dir: Path, 
     """Once the launch ``proc`` (logging to ``log_dir/launch.log``) has its clock running, run
     :mod:`mrs_nav.ros.navigation_bench_peer` with ``peer_args`` against it; the peer's JSON result."""
     out = log_dir / "result.json"
-    read_clock(env, timeout=60.0)  # the launch is up and /use_sim_time set before the peer starts
+    # the launch is up and /use_sim_time set before the peer starts
+    read_clock(env, timeout=STARTUP_TIMEOUT_S)
     peer = [sys.executable, "-m", "mrs_nav.ros.navigation_bench_peer", "--out", str(out), *peer_args]
     done = subprocess.run(peer, env=env, capture_output=True, text=True, timeout=900, check=False)
     if done.returncode != 0 or not out.is_file():
