@@ -98,9 +98,14 @@ def office(
     amcl = rospy.Subscriber("/amcl_pose", PoseWithCovarianceStamped, estimates.append, queue_size=10)
     poses = rospy.Publisher("/initialpose", PoseWithCovarianceStamped, queue_size=1)
     costmaps = Costmaps(rospy)
-    said: list[str] = []  # the navigation node's log lines: why a mark is there or not
+    said: list[str] = []  # the navigation's and the localisation's log lines: why a mark is there or not
     rosout = rospy.Subscriber(
-        "/rosout", Log, lambda m: said.append(m.msg) if m.name == "/rrt_navigation" else None, queue_size=100
+        "/rosout",
+        Log,
+        lambda m: (
+            said.append(f"{m.header.stamp.to_sec():.2f} {m.msg}") if m.name in ("/rrt_navigation", "/amcl") else None
+        ),
+        queue_size=100,
     )
     truth = TruthTrack(rospy, "office.world")
     with ros_master.launch("navigation.launch", *MAX_RATE, *args) as proc:
@@ -181,14 +186,14 @@ def test_marks_placed_at_a_wrong_pose_go_with_the_right_pose_estimate(office: di
     wait_for(lambda: costmaps.scans >= scans + 30, 60.0, "30 scans at the wrong pose")
     wait_costmap_after(office, rospy.get_time())
     marked = phantoms(office)
-    assert marked > 50, f"only {marked} cells marked at the wrong pose: the test injects nothing"
+    assert marked > 50, (f"only {marked} cells marked at the wrong pose: the test injects nothing", office["said"][-8:])
 
     corrected = tell_pose(office, START, RVIZ_ESTIMATE)
     wait_costmap_after(office, corrected + 10.0)
     left = phantoms(office)
     assert left == 0, (
         f"{left} of {marked} phantom cells left 10 s after the pose estimate",
-        office["said"][-6:],
+        office["said"][-8:],
         track(office, corrected),
     )
 

@@ -71,7 +71,12 @@ def _navigator(values: Mapping[str, Any]) -> NavigatorConfig:
 
 def _marking(values: Mapping[str, Any]) -> MarkingConfig:
     """When scans may mark the costmap (the localisation's confidence), from the parameters."""
-    return MarkingConfig(max_xy_stddev_m=values["marking_xy_stddev"], max_yaw_stddev_rad=values["marking_yaw_stddev"])
+    return MarkingConfig(
+        max_xy_stddev_m=values["marking_xy_stddev"],
+        max_yaw_stddev_rad=values["marking_yaw_stddev"],
+        max_tf_gap_m=values["marking_tf_xy_tolerance"],
+        max_tf_gap_rad=values["marking_tf_yaw_tolerance"],
+    )
 
 
 @dataclass(frozen=True)

@@ -78,7 +78,8 @@ from mrs_nav.navigation.navigator import (
 from mrs_nav.navigation.plan_worker import run_plan
 from mrs_nav.navigation.quiet import QuietWatch
 from mrs_nav.ros.clock_jump import TimeJumpGuard, keep_status_timer
-from mrs_nav.ros.conversions import covariance_3x3, pose_msg
+from mrs_nav.ros.conversions import covariance_3x3, pose_from_msg, pose_msg
+from mrs_nav.ros.map_odom import lookup_pose
 from mrs_nav.ros.navigation_conversions import (
     goal_in_frame,
     grid_from_msg,
@@ -138,6 +139,7 @@ class RrtNavigationNode:
         self._scans = QuietWatch(config.scan_timeout_s, config.stale_periods)
         self._holding_for: str | None = None  # the quiet-input reason the robot is held for, this tick
         self._warned_blind: str | None = None  # the hold warned of, this episode
+        self._tf_gap_said: str | None = None  # why tf's placement of the scans keeps them from marking
         self._costmap: tuple[OccupancyGrid | None, float] = (None, -math.inf)  # last published, when
         self._timer: rospy.Timer | None = None
         self._time_jump = TimeJumpGuard("rrt_navigation", self._on_time_jump, self._tf_buffer)
@@ -198,19 +200,42 @@ class RrtNavigationNode:
         except tf2_ros.TransformException as err:
             rospy.logwarn_throttle(5.0, f"rrt_navigation: dropping scan, no transform to the map: {err}")
             return
+        correction, odom = self._placement(msg.header.stamp)
         with self._lock:
-            self.navigator.set_scan(origin, ends, hit, self._marking.may_mark(msg.header.stamp.to_sec()))
+            may_mark = self._marking.may_mark(msg.header.stamp.to_sec(), correction, odom)
+            gap = None if may_mark else self._marking.tf_gap(correction, odom)
+            self.navigator.set_scan(origin, ends, hit, may_mark)
             self._last_scan = rospy.get_time()
+        if (gap is None) != (self._tf_gap_said is None):  # once as it begins, once as it ends
+            self._tf_gap_said = gap
+            rospy.loginfo(
+                f"rrt_navigation: {gap}: scans clear but do not mark"
+                if gap
+                else "rrt_navigation: tf places the scans by the localisation's estimate again"
+            )
+
+    def _placement(self, stamp: rospy.Time) -> tuple[Pose2D | None, Pose2D | None]:
+        """The ``map -> odom`` correction and the odometry pose tf gives at ``stamp`` (None, None where it has not
+        got them: in SLAM the map frame may be the odometry's own parent, or no odometry frame at all)."""
+        cfg = self.config
+        try:
+            return (
+                lookup_pose(self._tf_buffer, cfg.map_frame, cfg.odom_frame, stamp, 0.0),
+                lookup_pose(self._tf_buffer, cfg.odom_frame, cfg.base_frame, stamp, 0.0),
+            )
+        except tf2_ros.TransformException:
+            return None, None
 
     def _on_localisation(self, msg: PoseWithCovarianceStamped) -> None:
         try:
-            covariance = covariance_3x3(msg)
+            covariance, pose = covariance_3x3(msg), pose_from_msg(msg.pose.pose)
         except MrsNavError as err:
             rospy.logwarn_throttle(5.0, f"rrt_navigation: ignoring amcl_pose: {err}")
             return
+        correction = self._report_correction(msg, pose)
         with self._lock:
             before = self._marking.doubt()
-            self._marking.report(msg.header.stamp.to_sec(), covariance)
+            self._marking.report(msg.header.stamp.to_sec(), covariance, correction, pose)
             after = self._marking.doubt()
         if (before is None) != (after is None):
             rospy.loginfo(
@@ -219,12 +244,33 @@ class RrtNavigationNode:
                 else "rrt_navigation: the localisation is confident: scans mark obstacles again"
             )
 
-    def _on_initial_pose(self, _msg: PoseWithCovarianceStamped) -> None:
+    def _report_correction(self, msg: PoseWithCovarianceStamped, pose: Pose2D) -> Pose2D | None:
+        """The ``map -> odom`` correction an ``amcl_pose`` at ``pose`` implies: its pose after the odometry at its
+        stamp (None when tf has no odometry there; marking then falls back to the settle time, with a warning)."""
+        cfg = self.config
+        try:
+            odom = lookup_pose(
+                self._tf_buffer, cfg.odom_frame, cfg.base_frame, msg.header.stamp, cfg.transform_tolerance_s
+            )
+            return pose.compose(odom.inverse())
+        except tf2_ros.TransformException as err:
+            rospy.logwarn_throttle(
+                5.0, f"rrt_navigation: amcl_pose at {msg.header.stamp.to_sec():.3f} not checked against tf: {err}"
+            )
+            return None
+
+    def _on_initial_pose(self, msg: PoseWithCovarianceStamped) -> None:
         """A 2D Pose Estimate: the pose that placed the marks so far was wrong (module docstring). Dated when it
         arrives, not by its stamp: an estimate the localisation made from its old belief after that stamp, before
-        it took the new pose, must not count as confidence in the new one."""
+        it took the new pose, must not count as confidence in the new one (unless it lies at the pose given:
+        :meth:`MarkingGate.reset`)."""
+        stamp = None if msg.header.stamp.is_zero() else msg.header.stamp.to_sec()
+        try:
+            given: Pose2D | None = pose_from_msg(msg.pose.pose)
+        except MrsNavError:
+            given = None  # the localisation ignores it too; the marks go all the same
         with self._lock:
-            self._marking.reset(rospy.get_time())
+            self._marking.reset(rospy.get_time(), given, stamp)
             cleared = self.navigator.clear_marks()
         rospy.loginfo(
             f"rrt_navigation: new initial pose: dropped {cleared} marked cells; marking resumes once the"

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
 from mrs_nav.errors import InvalidInputError
+from mrs_nav.geometry import Pose2D
 from mrs_nav.navigation.marking import MarkingConfig, MarkingGate
 
 SURE = np.diag([0.01, 0.01, 0.01])  # 0.1 m, 0.1 rad
@@ -71,3 +74,43 @@ def test_doubt_says_why_the_pose_is_not_trusted() -> None:
     assert "1 sigma 0.50 m, 0.26 rad" in (gate.doubt() or "")
     gate.report(3.0, SURE)
     assert gate.doubt() is None
+
+
+def test_a_scan_marks_only_once_tf_places_it_by_the_confident_estimate() -> None:
+    """The localisation reports the right pose at 6 s but tf still carries its old map->odom (1 m and 30 deg off)
+    until its update has finished: scans placed by the old correction do not mark, however late they come."""
+    gate = MarkingGate()
+    odom = Pose2D(0.5, -0.2, 0.1)  # the robot stands still here in the odometry frame
+    right = Pose2D(-5.5, -4.8, -0.1)  # map -> odom of the right pose
+    wrong = Pose2D(-4.5, -4.8, -0.1 + math.pi / 6.0)
+    gate.reset(5.0)
+    gate.report(6.0, SURE, right)
+    late = 6.0 + gate.config.settle_s + 5.0
+    assert not gate.may_mark(late, wrong, odom)
+    assert gate.may_mark(late, right, odom)
+    nudged = Pose2D(right.x + 0.03, right.y, right.yaw + 0.01)  # the next update's small correction
+    assert gate.may_mark(late, nudged, odom)
+    assert not gate.may_mark(late, Pose2D(right.x, right.y, right.yaw + 0.1), odom)  # 0.1 rad off
+    gate.report(7.0, SURE)  # a report whose correction is not known: the settle time alone
+    assert gate.may_mark(late, wrong, odom)
+
+
+def test_tf_gap_bounds_must_be_positive() -> None:
+    with pytest.raises(InvalidInputError, match="max_tf_gap_m"):
+        MarkingConfig(max_tf_gap_m=-1.0)
+
+
+def test_a_report_stamped_before_the_reset_was_heard_of_counts_only_at_the_pose_given() -> None:
+    """The pose is given stamped 5.0 and heard of at 5.3; the localisation took it at once and, the robot standing
+    still, sends one report, stamped 5.1: it counts only if it lies at the pose given, not where the old belief
+    was."""
+    given = Pose2D(-5.0, -5.0, 0.0)
+    gate = MarkingGate()
+    gate.report(4.0, SURE, pose=Pose2D(-4.0, -5.0, math.pi / 6.0))
+    gate.reset(5.3, given, 5.0)
+    gate.report(5.1, SURE, pose=Pose2D(-4.0, -5.0, math.pi / 6.0))  # the old belief
+    assert not gate.may_mark(9.0)
+    gate.report(4.9, SURE, pose=Pose2D(-5.03, -5.05, 0.01))  # before the pose's own stamp
+    assert not gate.may_mark(9.0)
+    gate.report(5.1, SURE, pose=Pose2D(-5.03, -5.05, 0.01))
+    assert gate.may_mark(5.1 + gate.config.settle_s)
