@@ -79,8 +79,8 @@ def run_once(follower: Follower, seed: int) -> dict[str, Any]:
                     run_peer(proc, env, log_dir, [*goal, "--navigator", follower.navigator, "--world", str(world)])
                 )
             # the simulator logs to the screen, that is launch.log, once per switch out of lockstep
-            log = (log_dir / "launch.log").read_text(errors="replace")
-            result["free_runs"] = log.count(FREE_RUN_LOG)
+            log = (log_dir / "launch.log").read_text(errors="replace").splitlines()
+            result["free_run_log"] = [line for line in log if FREE_RUN_LOG in line]
             return result
 
 
@@ -90,8 +90,8 @@ def _run_line(name: str, seed: int, result: dict[str, Any]) -> str:
     return (
         f"{name} seed {seed}: reached {result['reached']}, final error {result['final_error_m']:.3f} m, "
         f"contacts {result['contacts']}, min clearance {'-' if clearance is None else f'{clearance:.3f}'} m, "
-        f"sim {result['sim_s']:.1f} s, lockstep free runs {result['free_runs']}"
-    )
+        f"sim {result['sim_s']:.1f} s, lockstep free runs {len(result['free_run_log'])}"
+    ) + "".join(f"\n  {line}" for line in result["free_run_log"])
 
 
 def _row(name: str, results: list[dict[str, Any]], first_seed: int = 0) -> list[object]:
