@@ -90,7 +90,8 @@ def _run_line(name: str, seed: int, result: dict[str, Any]) -> str:
     return (
         f"{name} seed {seed}: reached {result['reached']}, final error {result['final_error_m']:.3f} m, "
         f"contacts {result['contacts']}, min clearance {'-' if clearance is None else f'{clearance:.3f}'} m, "
-        f"sim {result['sim_s']:.1f} s, lockstep free runs {len(result['free_run_log'])}"
+        f"sim {result['sim_s']:.1f} s (goal at {result['sim_start']:.1f} s), "
+        f"lockstep free runs {len(result['free_run_log'])}"
     ) + "".join(f"\n  {line}" for line in result["free_run_log"])
 
 
