@@ -15,9 +15,17 @@ the pair live whatever the controller does, each after a silence ``s`` (wall sec
 * ``s > timeout`` with no publisher connected to the command topic: the controller is gone (killed: its TCP
   connection closed), the simulation runs freely;
 * ``s > stall_timeout`` with a publisher still connected: a controller in lockstep commands every tick (the
-  navigation nodes send a zero twist even when idle), so a connected one that is silent is starved of CPU or
-  hung, not idle. Running on would drive the robot blind on its last command until the watchdog stops it, so
-  the simulation waits much longer for it, and only gives up on one that stays hung.
+  navigation nodes send a zero twist even when idle), so a connected one that is silent is not idle. Running on
+  would drive the robot blind on its last command until the watchdog stops it (0.3 s of sim time), so the
+  simulation waits much longer for it, and only gives up on one that stays hung.
+
+A connected controller silent for ``timeout`` gets one period of grace first: the horizon moves to
+``t_c + 2 period`` and the simulation waits there. A rospy timer on sim time sleeps until ``T + period +
+(c2 - c1)`` for its tick ``T``, where ``c1 <= c2`` are its two readings of the clock in ``Rate.sleep`` and
+``rospy.sleep``; the simulation may move in between (up to ``t_c + period``, ``t_c >= c1 >= T``), so the next tick
+can fall past the horizon, up to ``t_c + 2 period``. Without the grace both sides wait for each other (measured: a
+loaded machine's navigation node idle in ``rospy.sleep`` while the simulator waited for it); with it the robot
+runs at most one period (0.1 s, 2.2 cm at 0.22 m/s) past its controller's last look, instead of free running.
 
 Free running lasts until the next command re-engages the lock. Each switch is reported once through
 ``on_switch`` (a :class:`LockstepSwitch`), never per step.
@@ -138,7 +146,8 @@ class LockstepGate:
         # asked only once the short timeout has passed: never per step of a controller that keeps up
         publishers = self._publishers()
         if publishers > 0 and silent <= self.config.stall_timeout:
-            return self._command_sim_time + self.config.period  # connected: starved, not gone; wait for it
+            # connected: starved or waiting for a tick just past the horizon; one period of grace, then wait for it
+            return self._command_sim_time + 2.0 * self.config.period
         self._free = True
         at = self._command_sim_time if sim_time is None else sim_time
         self._report(LockstepSwitch(True, at, silent, publishers))
