@@ -158,6 +158,12 @@ class MarkingGate:
             return False
         return self.tf_gap(correction, odom) is None
 
+    @property
+    def checks_placement(self) -> bool:
+        """Whether :meth:`may_mark` has a report's correction to check a scan's placement against (otherwise the
+        caller need not look the placement up)."""
+        return self._correction is not None
+
     def tf_gap(self, correction: Pose2D | None, odom: Pose2D | None) -> str | None:
         """How far tf's ``correction`` places the robot at ``odom`` from where the latest report's puts it, when
         that is more than the bounds (None: within them, or not known)."""

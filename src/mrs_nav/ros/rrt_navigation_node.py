@@ -200,7 +200,10 @@ class RrtNavigationNode:
         except tf2_ros.TransformException as err:
             rospy.logwarn_throttle(5.0, f"rrt_navigation: dropping scan, no transform to the map: {err}")
             return
-        correction, odom = self._placement(msg.header.stamp)
+        with self._lock:
+            checks = self._marking.checks_placement
+        # two tf lookups per scan only while there is an amcl_pose to check them against (none under SLAM)
+        correction, odom = self._placement(msg.header.stamp) if checks else (None, None)
         with self._lock:
             may_mark = self._marking.may_mark(msg.header.stamp.to_sec(), correction, odom)
             gap = None if may_mark else self._marking.tf_gap(correction, odom)
