@@ -161,7 +161,7 @@ def _navigate(nav: Shell, client: Shell, shell: Shell, rospy: Any, home: Path) -
         "lockstep:=true"
     )
     try:
-        nav.wait("waiting for goals on move_base_simple/goal", 180.0, "the navigation node")
+        nav.wait("the move_base action is up", 180.0, "the navigation node")
         cov = [0.0] * 36
         cov[0], cov[7], cov[35] = 0.25, 0.25, 0.06853891945200942
         estimate = (

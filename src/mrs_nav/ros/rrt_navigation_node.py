@@ -8,7 +8,9 @@ base_footprint``, and goals (any frame tf can bring into the map frame; an all-z
 heading) on the ``move_base`` action (move_base_msgs/MoveBaseAction: goal, cancel, preemption by a new goal,
 feedback ``base_position`` every control period, result; status SUCCEEDED, ABORTED or REJECTED with a text
 reason, PREEMPTED) or on ``move_base_simple/goal`` (geometry_msgs/PoseStamped), which is re-sent as an action
-goal (as move_base does) so both take the same path. Service ``move_base/make_plan`` (nav_msgs/GetPlan) plans without
+goal (as move_base does) so both take the same path. As move_base's, the action server starts only once the
+first map has arrived, so that a client's ``wait_for_server`` means its goal can be planned; an rviz goal before
+then is refused. Service ``move_base/make_plan`` (nav_msgs/GetPlan) plans without
 moving (an empty path when it finds none); service ``move_base/clear_costmaps`` (std_srvs/Empty) drops every
 obstacle the laser marked, as move_base's. ``amcl_pose`` and ``initialpose`` (geometry_msgs/
 PoseWithCovarianceStamped) decide when scans may mark obstacles (:mod:`mrs_nav.navigation.marking`: only while the
@@ -132,6 +134,7 @@ class RrtNavigationNode:
         self._server = actionlib.ActionServer(
             "move_base", MoveBaseAction, self._on_action_goal, self._on_action_cancel, auto_start=False
         )
+        self._taking_goals = threading.Event()  # the action server is started (on the first map)
         self._goal_ids = itertools.count(1)
         self._active: actionlib.ServerGoalHandle | None = None  # the goal the navigator is driving to
         self._last_scan = -math.inf  # sim time the last usable scan arrived
@@ -151,8 +154,6 @@ class RrtNavigationNode:
         """Publish the idle status, start the action server, the control loop and the inputs."""
         self._status_pub.publish(String(data="idle: waiting for a goal"))
         rospy.on_shutdown(self._stop)
-        self._server.start()
-        keep_status_timer(self._server)
         self._subs = [
             # numpy_msg: the cells arrive as one int8 array (plain genpy unpacks a tuple of ints, then numpy
             # copies it: most of what a SLAM map update cost this node)
@@ -185,6 +186,22 @@ class RrtNavigationNode:
             return
         with self._lock:
             self.navigator.set_map(grid, rospy.get_time())
+        if not self._taking_goals.is_set():
+            self._start_action_server(grid)
+
+    def _start_action_server(self, grid: OccupancyGrid) -> None:
+        """Start the ``move_base`` action on the first map, as move_base starts it once its costmaps have one: a
+        client's ``wait_for_server`` then means goals can be taken (the first map arrives on this one thread)."""
+        with self._server.lock:
+            if rospy.is_shutdown():
+                return
+            self._server.start()
+        keep_status_timer(self._server)
+        self._taking_goals.set()
+        rows, cols = grid.values.shape
+        rospy.loginfo(
+            f"rrt_navigation: received a {cols} x {rows} map at {grid.resolution:g} m/cell: the move_base action is up"
+        )
 
     def _on_scan(self, msg: LaserScan) -> None:
         self._time_jump.check()
@@ -287,7 +304,14 @@ class RrtNavigationNode:
         return EmptyResponse()
 
     def _on_simple_goal(self, msg: PoseStamped) -> None:
-        """Re-send an rviz goal as an action goal, as move_base does, so that it takes the action's path."""
+        """Re-send an rviz goal as an action goal, as move_base does, so that it takes the action's path (refused
+        here before the first map: actionlib drops goals, without a word, while its server is not started)."""
+        if not self._taking_goals.is_set():
+            where = msg.pose.position
+            self._report(
+                [NavEvent(EventKind.REFUSED, f"goal ({where.x:.2f}, {where.y:.2f}) refused: no map received yet")]
+            )
+            return
         goal = MoveBaseActionGoal()
         goal.header.stamp = rospy.Time.now()
         goal.goal_id.stamp = goal.header.stamp
