@@ -110,7 +110,7 @@ class MarkingGate:
         if not self._reported:
             return None
         if self._confident_since is None and self._doubt is None:
-            return "the localisation has not reported a confident pose since the last initial pose"
+            return "the localisation has not reported a confident pose since the last initial pose or time jump"
         return self._doubt
 
     def report(
@@ -137,6 +137,17 @@ class MarkingGate:
         self._correction = None
         self._reset_at = now
         self._given = None if pose is None else (now if stamp is None else min(stamp, now), pose)
+
+    def forget_time(self) -> None:
+        """Sim time went back (a bag played again, the simulator restarted): the stamps held are of the old time
+        line, where every new report would lie before the last reset and be ignored for good. Marking waits for the
+        next confident report, as after a reset, when there is a localisation at all."""
+        if self._reported:
+            self._confident_since = None
+            self._doubt = None
+        self._correction = None
+        self._reset_at = -math.inf
+        self._given = None
 
     def _near_given(self, stamp: float, pose: Pose2D | None) -> bool:
         """Whether a report at ``pose`` stamped ``stamp`` before the reset was heard of is the localisation's first

@@ -475,6 +475,7 @@ class RrtNavigationNode:
             self._last_scan = -math.inf
             self._scans.reset()
             self._costmap = (None, -math.inf)
+            self._marking.forget_time()
         if not dropped:
             return "no goal was active"
         text = f"sim time went back {seconds:.1f} s (a bag played again or the simulator restarted?); goal dropped"

@@ -114,3 +114,21 @@ def test_a_report_stamped_before_the_reset_was_heard_of_counts_only_at_the_pose_
     assert not gate.may_mark(9.0)
     gate.report(5.1, SURE, pose=Pose2D(-5.03, -5.05, 0.01))
     assert gate.may_mark(5.1 + gate.config.settle_s)
+
+
+def test_after_a_jump_back_in_time_the_next_confident_report_counts_again() -> None:
+    """A 2D Pose Estimate at sim time 100 s, then a bag played again from 0 s: every report of the new time line
+    lies before the reset. Without forgetting the old stamps, marking would stay off for good."""
+    gate = MarkingGate(MarkingConfig(settle_s=0.5))
+    gate.reset(100.0, Pose2D(1.0, 1.0, 0.0), 99.5)
+    gate.forget_time()
+    assert not gate.may_mark(5.0)  # no confident report on the new time line yet
+    gate.report(5.0, SURE, pose=Pose2D(-3.0, 2.0, 1.0))  # far from the pose given on the old time line
+    assert not gate.may_mark(5.4)
+    assert gate.may_mark(5.5)
+
+
+def test_without_a_localisation_a_jump_back_keeps_every_scan_marking() -> None:
+    gate = MarkingGate()
+    gate.forget_time()
+    assert gate.may_mark(0.0)
