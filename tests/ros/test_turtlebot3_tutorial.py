@@ -86,7 +86,11 @@ class Shell(Terminal):
         return marker
 
     def wait(self, text: str, timeout: float, what: str) -> None:
-        wait_for(lambda: text in self.screen(), timeout, f"{what} (screen: {self.screen()[-600:]!r})")
+        try:
+            wait_for(lambda: text in self.screen(), timeout, what)
+        except AssertionError as err:  # the screen as it is when the wait gives up, not as it was when it began
+            err.add_note(f"screen: {self.screen()[-1200:]}")
+            raise
 
     def interrupt(self, marker: str, timeout: float = 60.0) -> None:
         """Ctrl-C the running command and wait for its end."""
