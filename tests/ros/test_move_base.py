@@ -148,6 +148,40 @@ def test_a_goal_inside_the_cylinder_is_rejected_with_a_reason(arena: dict[str, A
     assert "inside an obstacle" in arena["client"].get_goal_status_text()
 
 
+def test_a_goal_whose_id_repeats_a_finished_goals_is_taken_as_a_new_goal(arena: dict[str, Any]) -> None:
+    """The ROS wiki's goal script run twice under its one node name, each time sending before its first /clock
+    message, sends the id ``<name>-1-0.000`` twice: the second goal must be taken, not ignored by actionlib (its
+    client then waited for a result for ever)."""
+    from actionlib_msgs.msg import GoalStatus
+    from move_base_msgs.msg import MoveBaseActionGoal, MoveBaseActionResult
+
+    rospy, truth = arena["rospy"], arena["truth"]
+    results: list[tuple[str, int, str]] = []
+    sub = rospy.Subscriber(
+        "/move_base/result",
+        MoveBaseActionResult,
+        lambda m: results.append((m.status.goal_id.id, m.status.status, m.status.text)),
+        queue_size=10,
+    )
+    pub = rospy.Publisher("/move_base/goal", MoveBaseActionGoal, queue_size=1)
+    goal_id = "/simple_navigation_goals-1-0.000"
+    try:
+        wait_for(lambda: pub.get_num_connections() > 0, 30.0, "the server on /move_base/goal")
+        _, x, y = truth.last()
+        for n, where in enumerate([target(rospy, 0.3, 0.2, 0.0), target(rospy, x, y, 0.0)]):
+            where.target_pose.pose.orientation.w = 0.0  # the second: where the robot stands, no heading
+            msg = MoveBaseActionGoal(goal=where)
+            msg.goal_id.id = goal_id  # stamp 0, as a client without a clock yet sends it
+            pub.publish(msg)
+            wait_for(lambda n=n: len([r for r in list(results) if r[0] == goal_id]) > n, 60.0, f"result {n + 1}")
+        first, second = [r for r in results if r[0] == goal_id]
+        assert first[1] == GoalStatus.REJECTED, first
+        assert second[1] == GoalStatus.SUCCEEDED, second
+    finally:
+        sub.unregister()
+        pub.unregister()
+
+
 def test_an_unreachable_goal_is_aborted_with_a_reason(arena: dict[str, Any]) -> None:
     from actionlib_msgs.msg import GoalStatus
 

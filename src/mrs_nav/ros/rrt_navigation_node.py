@@ -79,6 +79,7 @@ from mrs_nav.navigation.navigator import (
 )
 from mrs_nav.navigation.plan_worker import run_plan
 from mrs_nav.navigation.quiet import QuietWatch
+from mrs_nav.ros.action_server import RepeatedIdActionServer
 from mrs_nav.ros.clock_jump import TimeJumpGuard, keep_status_timer
 from mrs_nav.ros.conversions import covariance_3x3, pose_from_msg, pose_msg
 from mrs_nav.ros.map_odom import lookup_pose
@@ -131,7 +132,7 @@ class RrtNavigationNode:
         )
         self._status_pub = rospy.Publisher("~status", String, queue_size=10, latch=True)
         self._action_goal_pub = rospy.Publisher("move_base/goal", MoveBaseActionGoal, queue_size=1)
-        self._server = actionlib.ActionServer(
+        self._server = RepeatedIdActionServer(
             "move_base", MoveBaseAction, self._on_action_goal, self._on_action_cancel, auto_start=False
         )
         self._taking_goals = threading.Event()  # the action server is started (on the first map)
