@@ -111,6 +111,14 @@ class StatusLog:
         self.sub.unregister()
 
 
+def wait_for_move_base(rospy: Any, namespace: str = "", timeout: float = 120.0) -> None:
+    """Until rrt_navigation's move_base action in ``namespace`` is up: it starts on the node's first map, so a goal
+    sent after this is planned, not refused for want of a map (its status is published only once started)."""
+    from actionlib_msgs.msg import GoalStatusArray
+
+    rospy.wait_for_message(f"{namespace}/move_base/status", GoalStatusArray, timeout)  # wall seconds
+
+
 def world_map_msg(rospy: Any, world: str, margin: float = 0.2) -> Any:
     """The map of a world file (0.05 m cells, free for ``margin`` m outside the walls) as a
     nav_msgs/OccupancyGrid."""

@@ -8,7 +8,7 @@ from typing import Any
 
 import pytest
 
-from tests.ros.navharness import FOOTPRINT_RADIUS, StatusLog, TruthTrack
+from tests.ros.navharness import FOOTPRINT_RADIUS, StatusLog, TruthTrack, wait_for_move_base
 from tests.rosharness import RosMaster, wait_for
 
 pytestmark = pytest.mark.ros
@@ -37,15 +37,16 @@ def test_the_arena_goal_is_reached_on_the_slam_map_without_contact(ros_master: R
         ) as proc:
             wait_for(lambda: proc.poll() is not None or (maps and goal_pub.get_num_connections() > 0), 60.0, "a map")
             assert proc.poll() is None, "roslaunch exited"
-            first_map = rospy.get_time()
-            wait_for(lambda: rospy.get_time() > first_map + 3.0, 30.0, "the navigation node to have the map too")
+            wait_for_move_base(rospy)
             goal = PoseStamped()
             goal.header.frame_id = "map"
             goal.pose.position.x, goal.pose.position.y = 1.5, 1.5
             goal.pose.orientation.w = 1.0
             started = rospy.get_time()
             goal_pub.publish(goal)
-            wait_for(lambda: status.has("reached") or status.has("failed"), 150.0, "the goal to be reached")
+            wait_for(
+                lambda: any(status.has(s) for s in ("reached", "failed", "refused")), 150.0, "the goal to be reached"
+            )
             finished = rospy.get_time()
         assert status.has("reached"), status.messages
         _, x, y = truth.last()
