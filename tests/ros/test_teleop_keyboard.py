@@ -37,7 +37,7 @@ class Terminal:
         self._tmux("send-keys", "-t", "t", *keys)
 
     def screen(self) -> str:
-        return self._tmux("capture-pane", "-p", "-t", "t")
+        return self._tmux("capture-pane", "-p", "-J", "-t", "t")  # -J: wrapped lines joined, so a text is found whole
 
     def close(self) -> None:
         subprocess.run(
