@@ -10,7 +10,7 @@ feedback ``base_position`` every control period, result; status SUCCEEDED, ABORT
 reason, PREEMPTED) or on ``move_base_simple/goal`` (geometry_msgs/PoseStamped), which is re-sent as an action
 goal (as move_base does) so both take the same path. As move_base's, the action server starts only once the
 first map has arrived, so that a client's ``wait_for_server`` means its goal can be planned; an rviz goal before
-then is refused. Service ``move_base/make_plan`` (nav_msgs/GetPlan) plans without
+then is kept and taken once it is up. Service ``move_base/make_plan`` (nav_msgs/GetPlan) plans without
 moving (an empty path when it finds none); service ``move_base/clear_costmaps`` (std_srvs/Empty) drops every
 obstacle the laser marked, as move_base's. ``amcl_pose`` and ``initialpose`` (geometry_msgs/
 PoseWithCovarianceStamped) decide when scans may mark obstacles (:mod:`mrs_nav.navigation.marking`: only while the
@@ -136,6 +136,8 @@ class RrtNavigationNode:
             "move_base", MoveBaseAction, self._on_action_goal, self._on_action_cancel, auto_start=False
         )
         self._taking_goals = threading.Event()  # the action server is started (on the first map)
+        self._early_goal: PoseStamped | None = None  # the last rviz goal sent before then, taken once started
+        self._early_lock = threading.Lock()  # one of the two happens first: the goal kept, or the server up
         self._goal_ids = itertools.count(1)
         self._active: actionlib.ServerGoalHandle | None = None  # the goal the navigator is driving to
         self._last_scan = -math.inf  # sim time the last usable scan arrived
@@ -198,11 +200,15 @@ class RrtNavigationNode:
                 return
             self._server.start()
         keep_status_timer(self._server)
-        self._taking_goals.set()
+        with self._early_lock:
+            self._taking_goals.set()
+            early, self._early_goal = self._early_goal, None
         rows, cols = grid.values.shape
         rospy.loginfo(
             f"rrt_navigation: received a {cols} x {rows} map at {grid.resolution:g} m/cell: the move_base action is up"
         )
+        if early is not None:
+            self._send_action_goal(self._action_goal(early))
 
     def _on_scan(self, msg: LaserScan) -> None:
         self._time_jump.check()
@@ -305,20 +311,33 @@ class RrtNavigationNode:
         return EmptyResponse()
 
     def _on_simple_goal(self, msg: PoseStamped) -> None:
-        """Re-send an rviz goal as an action goal, as move_base does, so that it takes the action's path (refused
-        here before the first map: actionlib drops goals, without a word, while its server is not started)."""
-        if not self._taking_goals.is_set():
-            where = msg.pose.position
-            self._report(
-                [NavEvent(EventKind.REFUSED, f"goal ({where.x:.2f}, {where.y:.2f}) refused: no map received yet")]
-            )
-            return
+        """Re-send an rviz goal as an action goal, as move_base does, so that it takes the action's path. One sent
+        before the first map (a latched goal, a script quicker than the map) is kept and taken once the action is
+        up: actionlib would drop it without a word while its server is not started."""
+        with self._early_lock:
+            if not self._taking_goals.is_set():
+                self._early_goal = msg
+                where = msg.pose.position
+                rospy.loginfo(f"rrt_navigation: goal ({where.x:.2f}, {where.y:.2f}) kept until the first map arrives")
+                return
+        self._send_action_goal(self._action_goal(msg))
+
+    def _send_action_goal(self, goal: MoveBaseActionGoal) -> None:
+        """On ``move_base/goal``, where a bag or ``rostopic echo`` sees it, once the server's own subscriber is
+        connected; straight to the server until then (it subscribes as it starts: the goal would be lost)."""
+        if self._action_goal_pub.get_num_connections() > 0:
+            self._action_goal_pub.publish(goal)
+        else:
+            self._server.internal_goal_callback(goal)
+
+    def _action_goal(self, target: PoseStamped) -> MoveBaseActionGoal:
+        """``target`` as a move_base action goal with an id of this node's."""
         goal = MoveBaseActionGoal()
         goal.header.stamp = rospy.Time.now()
         goal.goal_id.stamp = goal.header.stamp
         goal.goal_id.id = f"move_base_simple-{next(self._goal_ids)}-{goal.header.stamp.to_sec():.3f}"
-        goal.goal.target_pose = msg
-        self._action_goal_pub.publish(goal)
+        goal.goal.target_pose = target
+        return goal
 
     def _on_action_goal(self, handle: actionlib.ServerGoalHandle) -> None:
         """A new goal (called by actionlib with its lock held; ours is taken inside it, never the other way)."""
