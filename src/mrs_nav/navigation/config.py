@@ -46,6 +46,8 @@ class NavigatorConfig:
     progress_m: float = 0.1
     progress_timeout_s: float = 30.0
     map_timeout_s: float = 0.0  # 0 = off: a static map (published once, latched) never refreshes
+    # s to hold the robot at a goal reached on a pose in doubt for the localisation to be confident; 0 = fail at once
+    confirm_timeout_s: float = 5.0
     follower: FollowerConfig = field(default_factory=FollowerConfig)
     approach: ApproachConfig = field(default_factory=ApproachConfig)
     # what is tried before a goal whose plans keep failing, or that makes no progress, is given up
@@ -73,6 +75,7 @@ class NavigatorConfig:
             "retry_delay_s",
             "progress_timeout_s",
             "map_timeout_s",
+            "confirm_timeout_s",
         ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0.0):

@@ -18,9 +18,10 @@ than the robot radius plus ``stop_clearance_m`` stops the robot and makes a new 
 caller says why to hold (e.g. a stale localisation), or when the last map is older than ``map_timeout_s``, the
 robot is stopped and the goal kept (a ``HOLDING`` event names why, and again whenever the reason changes); it
 resumes when all are back. Before a goal is given up for failed plans or lack of progress, the recoveries of
-:mod:`.recovery` run (clearing marks, a turn on the spot); a goal reached on a pose the caller doubts (``doubt``:
-a localisation not confident) ends FAILED with that reason. Times are in seconds of the caller's clock (sim time
-in ROS), distances in metres, angles in radians.
+:mod:`.recovery` run (clearing marks, a turn on the spot). A goal reached on a pose the caller doubts (``doubt``:
+a localisation not confident) holds the robot (``HOLDING``, :attr:`Navigator.confirming_since`) up to
+``confirm_timeout_s`` for the doubt to go: reached then, else FAILED with that reason. Times are in seconds of
+the caller's clock (sim time in ROS), distances in metres, angles in radians.
 
 With ``update(pose, now, defer=True)`` a needed plan is returned as a :class:`PlanRequest` for a worker
 (:meth:`run_plan`, then :meth:`finish_plan`). Meanwhile the robot follows the current path when the plan is only
@@ -120,6 +121,7 @@ class Navigator:
         self._pending: PlanRequest | None = None
         self._recoveries = Recoveries(cfg.recovery)
         self._rotation: Rotation | None = None  # a rotate_recovery under way
+        self.confirming_since: float | None = None  # when the wait at a goal reached on a pose in doubt began
 
     @property
     def state(self) -> GoalState:
@@ -216,6 +218,7 @@ class Navigator:
         self._holding = None
         self._pending = None  # a plan in flight for this goal is now stale
         self._rotation = None
+        self.confirming_since = None
         self._recoveries.reset()
 
     def _end(self, state: GoalState) -> None:
@@ -235,8 +238,8 @@ class Navigator:
         """One control step for the robot at ``pose`` (map frame; ``None`` when unknown) at time ``now``. With
         ``defer`` a needed plan is not made here but returned as the command's ``request`` (module docstring);
         ``hold`` (why; a text that stays the same while the cause lasts) stops the robot and keeps the goal, as a
-        lost pose does; ``doubt`` (why the pose is not trusted, e.g. a localisation not confident) makes a goal
-        reached at that pose end FAILED with that reason, never reached."""
+        lost pose does; ``doubt`` (why the pose is not trusted, e.g. a localisation not confident) keeps a goal
+        reached at that pose from being reached: it waits up to ``confirm_timeout_s``, then ends FAILED."""
         if not self._goal.active:
             return NavCommand(0.0, 0.0)
         hold = hold or self._hold_reason(pose, now)
@@ -252,7 +255,8 @@ class Navigator:
             self._holding = None
             events.append(NavEvent(EventKind.RESUMED, "pose and map are back; resuming"))
         distance = math.hypot(self.goal[0] - pose.x, self.goal[1] - pose.y)
-        if self._approach is None and distance <= self.config.approach_radius_m:
+        moved_off = self.confirming_since is not None and distance > self.config.approach.xy_tolerance_m  # re-approach
+        if (self._approach is None and distance <= self.config.approach_radius_m) or moved_off:
             self._approach = GoalApproach(*self.goal, self.goal_yaw, self.config.approach)
         if self._approach is not None:
             return self._approach_step(pose, now, distance, events, doubt)
@@ -315,8 +319,7 @@ class Navigator:
     def _approach_step(
         self, pose: Pose2D, now: float, distance: float, events: list[NavEvent], doubt: str | None
     ) -> NavCommand:
-        """Drive the last centimetres (and turn to the heading); the goal is reached when the approach is done
-        (and the pose is trusted: ``doubt`` None)."""
+        """Drive the last centimetres, turn to the heading: reached when done on a trusted pose (:meth:`_confirm`)."""
         assert self._approach is not None
         step = self._approach.command(pose, now)
         if step.done:
@@ -325,19 +328,31 @@ class Navigator:
             heading = "" if yaw is None else f" and {abs(wrap_angle(yaw - pose.yaw)):.3f} rad"
             where = f"{distance:.3f} m{heading} away"
             if doubt is not None:
-                self._end(GoalState.FAILED)
-                events.append(
-                    NavEvent(EventKind.FAILED, f"{what} failed: reached by the estimate ({where}) but {doubt}")
-                )
+                self._confirm(now, f"{what} failed: reached by the estimate ({where}) but {doubt}", events)
             else:
                 self._end(GoalState.REACHED)
                 events.append(NavEvent(EventKind.REACHED, f"{what} reached, {where}"))
             return NavCommand(0.0, 0.0, events=tuple(events))
+        self.confirming_since = None  # the estimate moved off the goal: a new wait when the approach is done again
         cfg = self.config
         u = step.u
         if u > 0.0 and return_ahead(pose, self._returns, cfg.robot_radius, cfg.stop_clearance_m):
             u = 0.0  # turning on the spot is safe for a round robot; driving on is not
         return NavCommand(u, step.omega, events=tuple(events))
+
+    def _confirm(self, now: float, failure: str, events: list[NavEvent]) -> None:
+        """Reached on a pose in doubt: hold up to ``confirm_timeout_s`` (a robot standing still gets no new estimate
+        unless the caller asks for one while :attr:`confirming_since`), then fail with ``failure``."""
+        timeout = self.config.confirm_timeout_s
+        if self.confirming_since is None:
+            self.confirming_since = now
+            if timeout > 0.0:
+                wait = f"waiting up to {timeout:.1f} s for the localisation to be confident"
+                events.append(NavEvent(EventKind.HOLDING, f"{self._goal.describe()} reached by the estimate; {wait}"))
+        if now - self.confirming_since >= timeout:
+            waited = f" (waited {now - self.confirming_since:.1f} s for it to be confident)" if timeout > 0.0 else ""
+            self._end(GoalState.FAILED)
+            events.append(NavEvent(EventKind.FAILED, failure + waited))
 
     def _hold_reason(self, pose: Pose2D | None, now: float) -> str | None:
         if pose is None:

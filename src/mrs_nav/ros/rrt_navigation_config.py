@@ -54,6 +54,7 @@ def _navigator(values: Mapping[str, Any]) -> NavigatorConfig:
         max_failed_plans=values["max_failed_plans"],
         retry_delay_s=values["retry_delay"],
         progress_timeout_s=values["progress_timeout"],
+        confirm_timeout_s=values["confirm_timeout"],
         map_timeout_s=values["map_timeout"],
         obstacle_range_m=values["obstacle_range"],
         raytrace_range_m=values["raytrace_range"],

@@ -15,9 +15,11 @@ moving (an empty path when it finds none); service ``move_base/clear_costmaps`` 
 obstacle the laser marked, as move_base's. ``amcl_pose`` and ``initialpose`` (geometry_msgs/
 PoseWithCovarianceStamped) decide when scans may mark obstacles (:mod:`mrs_nav.navigation.marking`: only while the
 localisation is confident; a 2D Pose Estimate drops the marks placed so far), and a goal reached while the
-localisation is not confident ends ABORTED with that reason, never SUCCEEDED. Before a goal is aborted for failed
-plans or lack of progress the recoveries of :mod:`mrs_nav.navigation.recovery` are tried (move_base's parameter
-names).
+localisation is not confident is never SUCCEEDED on that estimate: the robot is held up to ``~confirm_timeout``
+while the node asks the localisation's ``request_nomotion_update`` (std_srvs/Empty, when there is one) for an
+update about once a second; it ends SUCCEEDED once the localisation is confident, else ABORTED with the reason.
+Before a goal is aborted for failed plans or lack of progress the recoveries of :mod:`mrs_nav.navigation.recovery`
+are tried (move_base's parameter names).
 
 Outputs: ``cmd_vel`` (geometry_msgs/Twist) while a goal is active (and a zero Twist when it ends); with
 ``~heartbeat`` also a zero Twist every control period while idle, which is what paces a simulator in lockstep;
@@ -110,6 +112,9 @@ STATUS_OF_EVENT = {
     EventKind.FAILED: "failed",
 }
 COSTMAP_PERIOD_S = 1.0  # sim seconds between costmap messages at most (rviz redraws a big grid slowly)
+NOMOTION_SERVICE = "request_nomotion_update"  # amcl's (and our localisation's): one update without motion
+NOMOTION_PERIOD_S = 1.0  # sim seconds between such requests while a goal waits for a confident localisation
+NOMOTION_WAIT_S = 0.5  # wall seconds to wait for the service to show (none under SLAM, which leaves no doubt)
 
 
 class RrtNavigationNode:
@@ -152,6 +157,7 @@ class RrtNavigationNode:
         # one worker: at most one plan runs at a time (the navigator asks for no other while one is in flight)
         self._planner_pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="rrt_navigation_plan")
         self._plan: tuple[PlanRequest, Future[PlanOutcome]] | None = None
+        self._nomotion: tuple[float, threading.Thread | None] = (-math.inf, None)  # last request: sim time, thread
 
     def start(self) -> None:
         """Publish the idle status, start the action server, the control loop and the inputs."""
@@ -466,6 +472,7 @@ class RrtNavigationNode:
             if command.request is not None:
                 self._plan = (command.request, self._planner_pool.submit(self.navigator.run_plan, command.request))
             state = self.navigator.state
+            confirming = self.navigator.confirming_since is not None
             handle = self._active
             if state is not GoalState.ACTIVE:
                 self._active = None
@@ -483,8 +490,25 @@ class RrtNavigationNode:
             publish_unless_shutdown(self._costmap_pub, grid_msg(costmap, now, self.config.map_frame), "rrt_navigation")
         self._report(events)
         self._warn_lasting(blind, lasting)
+        self._ask_for_update(now.to_sec(), confirming)
         if handle is not None:
             self._action_step(handle, state, pose, now, events)
+
+    def _ask_for_update(self, now: float, confirming: bool) -> None:
+        """While a goal reached by the estimate waits for the localisation to be confident (``confirming``), ask it
+        for an update without motion about once a second of sim time: a robot standing still gets none otherwise,
+        and each request brings one. From a thread of its own: the control timer never waits on the service."""
+        asked, thread = self._nomotion
+        if not confirming:
+            self._nomotion = (-math.inf, None)
+            return
+        if now - asked < NOMOTION_PERIOD_S or (thread is not None and thread.is_alive()):
+            return
+        thread = threading.Thread(
+            target=_request_nomotion_update, args=(asked == -math.inf,), name="nomotion_update", daemon=True
+        )
+        self._nomotion = (now, thread)
+        thread.start()
 
     def _on_time_jump(self, seconds: float) -> str:
         """Sim time went back: abort the active goal (its deadlines and progress are of the old time line) and
@@ -575,3 +599,20 @@ class RrtNavigationNode:
             self._server.started = False
         self._planner_pool.shutdown(wait=False)
         publish_unless_shutdown(self._cmd_pub, Twist(), "rrt_navigation")
+
+
+def _request_nomotion_update(first: bool) -> None:
+    """Call the localisation's ``request_nomotion_update`` if it offers one (logged at info level the ``first`` time
+    of a wait)."""
+    try:
+        rospy.wait_for_service(NOMOTION_SERVICE, timeout=NOMOTION_WAIT_S)
+        rospy.ServiceProxy(NOMOTION_SERVICE, Empty)()
+    except rospy.ServiceException as err:
+        rospy.logwarn(f"rrt_navigation: {NOMOTION_SERVICE} failed: {err}")
+        return
+    except rospy.ROSException:  # no such service (or shutting down): the wait runs out unasked
+        rospy.logdebug(f"rrt_navigation: no {NOMOTION_SERVICE} service to ask for a localisation update")
+        return
+    (rospy.loginfo if first else rospy.logdebug)(
+        f"rrt_navigation: asked the localisation for an update without motion ({NOMOTION_SERVICE})"
+    )

@@ -658,3 +658,57 @@ def test_a_goal_reached_on_a_pose_in_doubt_fails_with_the_reason() -> None:
     assert events[-1].kind is EventKind.FAILED
     assert "reached by the estimate" in events[-1].message
     assert "the localisation is not confident" in events[-1].message
+
+
+def _drive_in_doubt(nav: Navigator, doubt_until: float) -> tuple[list[EventKind], list[tuple[float, float]]]:
+    """Drive to the goal of ``nav`` (arena, from (-1.5, -1.5)) while the pose is in doubt until ``doubt_until``
+    (s after the navigator said it waits); the events and the commands given from then on."""
+    pose, now, kinds, waiting = Pose2D(-1.5, -1.5, 0.0), 0.0, [], []
+    arrived: float | None = None
+    while now < 30.0 and nav.state is GoalState.ACTIVE:
+        unsure = arrived is None or now < arrived + doubt_until
+        cmd = nav.update(pose, now, doubt="the localisation is not confident" if unsure else None)
+        kinds.extend(e.kind for e in cmd.events)
+        if arrived is None and EventKind.HOLDING in kinds:
+            arrived = now
+        if arrived is not None:
+            waiting.append((cmd.u, cmd.omega))
+        pose = Pose2D(pose.x + cmd.u * 0.1 * math.cos(pose.yaw), pose.y + cmd.u * 0.1 * math.sin(pose.yaw), pose.yaw)
+        now += 0.1
+    return kinds, waiting
+
+
+def test_a_goal_reached_in_doubt_is_reached_once_the_localisation_is_confident_the_robot_held_meanwhile() -> None:
+    nav = Navigator(astar, seed=1)
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(NavGoal(-1.3, -1.5), 0.0)
+    kinds, waiting = _drive_in_doubt(nav, doubt_until=2.0)
+    assert nav.state is GoalState.REACHED
+    assert kinds[-2:] == [EventKind.HOLDING, EventKind.REACHED]
+    assert len(waiting) >= 20
+    assert all(command == (0.0, 0.0) for command in waiting)
+
+
+def test_a_goal_reached_in_doubt_fails_at_once_without_a_confirm_timeout() -> None:
+    nav = Navigator(astar, NavigatorConfig(confirm_timeout_s=0.0), seed=1)
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(NavGoal(-1.3, -1.5), 0.0)
+    kinds, waiting = _drive_in_doubt(nav, doubt_until=2.0)
+    assert nav.state is GoalState.FAILED
+    assert kinds[-1] is EventKind.FAILED
+    assert EventKind.HOLDING not in kinds
+    assert waiting == []  # failed the tick it arrived
+
+
+def test_a_goal_reached_in_doubt_is_approached_again_when_the_estimate_moves_off_it() -> None:
+    nav = Navigator(astar, seed=1)
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(NavGoal(-1.3, -1.5), 0.0)
+    pose, now = Pose2D(-1.3, -1.5, 0.0), 0.0
+    while nav.confirming_since is None:
+        nav.update(pose, now, doubt="unsure")
+        now += 0.1
+    cmd = nav.update(Pose2D(-1.45, -1.5, 0.0), now)  # a confident estimate 0.15 m short of the goal
+    assert nav.state is GoalState.ACTIVE
+    assert nav.confirming_since is None
+    assert cmd.u > 0.0
