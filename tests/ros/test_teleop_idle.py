@@ -27,7 +27,9 @@ def test_teleop_speed_is_not_fought_by_the_idle_navigation_node(ros_master: RosM
         ros_master.launch("rrt_navigation.launch", "slam:=false") as nav,
     ):
         wait_for(lambda: truth.last() is not None, 60.0, "ground truth from the simulator")
-        wait_for(lambda: rospy.get_published_topics() and _has_publisher(rospy, "/rrt_navigation/status"), 60.0, "the node")
+        wait_for(
+            lambda: rospy.get_published_topics() and _has_publisher(rospy, "/rrt_navigation/status"), 60.0, "the node"
+        )
         teleop = rospy.Publisher("/cmd_vel", Twist, queue_size=1)
         wait_for(lambda: teleop.get_num_connections() > 0, 30.0, "the simulator's cmd_vel")
         stop = threading.Event()
