@@ -9,6 +9,7 @@ from typing import Any
 
 import pytest
 
+from mrs_nav.sim.lockstep import FREE_RUN_LOG
 from tests.rosharness import RosMaster, wait_for
 
 pytestmark = pytest.mark.ros
@@ -63,10 +64,18 @@ def test_lockstep_holds_the_sim_within_one_period_of_the_last_command_and_runs_f
             wait_for(lambda: samples[-1] > held, 5.0, "the next command to release the simulation")
             time.sleep(0.2)
             assert samples[-1] == pytest.approx(held + 0.1, abs=1e-6)
-            # the controller falls silent: after the 1 s wall timeout the simulation runs freely again
+            # the controller falls silent but stays connected (not gone): after the 1 s timeout one period of grace
+            # (a rospy timer's tick can fall just past the horizon), then held
+            time.sleep(2.0)
+            assert samples[-1] == pytest.approx(held + 0.2, abs=1e-6)
+            # the controller goes away (its connection closes): within the 1 s timeout the simulation runs freely
+            cmd.unregister()
             released = samples[-1]
             time.sleep(2.0)
             assert samples[-1] - released > 3.0
+        log = max(ros_master.log_dir.glob("lockstep-*.log"), key=lambda p: p.stat().st_mtime).read_text()
+        assert log.count(FREE_RUN_LOG) == 1, "one warning for the one switch to free running"
+        assert re.search(rf"{FREE_RUN_LOG} [0-9.]+ s: no publisher on /cmd_vel and no command for [0-9.]+ s", log)
     finally:
         sub.unregister()
         cmd.unregister()

@@ -6,13 +6,16 @@ diagonal runs past the cylinder: ``potential_field_navigation.launch`` (the pote
 world's obstacles) and ``rrt_navigation.launch`` (SLAM and the RRT* path follower). The goal goes out through
 :mod:`mrs_nav.ros.navigation_bench_peer`, which counts the simulator's ground-truth contacts and the smallest
 clearance of the true footprint. Reported per follower: runs, goals reached, runs with a contact, the contacts
-in all, the smallest clearance and the seeds that touched. Seeds run from ``--first-seed`` (0) for each follower.
+in all, the smallest clearance and the seeds that touched. Seeds run from ``--first-seed`` (0) for each
+follower. Each run's outcome, with the times the simulator left lockstep (its free-running warnings), also goes
+to stderr as the run ends.
 """
 
 from __future__ import annotations
 
 import argparse
 import statistics
+import sys
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,6 +28,7 @@ from mrs_nav.geometry import Pose2D
 from mrs_nav.options import optional_runs_option, runs_option
 from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.ros_processes import process, roscore, roslaunch_command, run_peer
+from mrs_nav.sim.lockstep import FREE_RUN_LOG
 from mrs_nav.tables import markdown_table
 
 # The arena of bench navigation: the diagonal from the start to the goal passes the cylinder at (0.3, 0.2).
@@ -71,9 +75,24 @@ def run_once(follower: Follower, seed: int) -> dict[str, Any]:
             )
             with process(launch, env, log_dir / "launch.log") as proc:
                 goal = ["--goal", *map(str, GOAL)]
-                return dict(
+                result = dict(
                     run_peer(proc, env, log_dir, [*goal, "--navigator", follower.navigator, "--world", str(world)])
                 )
+            # the simulator logs to the screen, that is launch.log, once per switch out of lockstep
+            log = (log_dir / "launch.log").read_text(errors="replace").splitlines()
+            result["free_run_log"] = [line for line in log if FREE_RUN_LOG in line]
+            return result
+
+
+def _run_line(name: str, seed: int, result: dict[str, Any]) -> str:
+    """One run's outcome, printed as it ends so that a later failure of the invocation loses no finished run."""
+    clearance = result["min_clearance_m"]
+    return (
+        f"{name} seed {seed}: reached {result['reached']}, final error {result['final_error_m']:.3f} m, "
+        f"contacts {result['contacts']}, min clearance {'-' if clearance is None else f'{clearance:.3f}'} m, "
+        f"sim {result['sim_s']:.1f} s (goal at {result['sim_start']:.1f} s), "
+        f"lockstep free runs {len(result['free_run_log'])}"
+    ) + "".join(f"\n  {line}" for line in result["free_run_log"])
 
 
 def _row(name: str, results: list[dict[str, Any]], first_seed: int = 0) -> list[object]:
@@ -102,7 +121,10 @@ def run(args: argparse.Namespace) -> str:
     rows = []
     for name in names:
         seeds = range(args.first_seed, args.first_seed + args.runs)
-        results = [run_once(FOLLOWERS[name], seed) for seed in tqdm(seeds, desc=name, leave=False)]
+        results = []
+        for seed in tqdm(seeds, desc=name, leave=False):
+            results.append(run_once(FOLLOWERS[name], seed))
+            tqdm.write(_run_line(name, seed, results[-1]), file=sys.stderr)
         rows.append(_row(name, results, args.first_seed))
     header = [
         "follower",

@@ -4,9 +4,9 @@ running ROS stack.
 Run as ``python -m mrs_nav.ros.navigation_bench_peer --goal X Y --out FILE`` against a master on which
 ``rrt_navigation.launch`` runs. It waits for the first map and the navigation node, lets 3 s of sim time pass
 (so the node has the map too), sends the goal on ``/move_base_simple/goal`` and waits for ``reached`` or
-``failed`` on ``/rrt_navigation/status``. Writes JSON: ``reached``, ``sim_s`` and ``wall_s`` from the goal to
-the outcome, ``wall_start`` (``time.monotonic()``, system-wide, when the goal went out), ``final_error_m`` (true
-pose from ``/ground_truth/odom`` to the goal) and ``contacts``.
+``failed`` on ``/rrt_navigation/status``. Writes JSON: ``reached``, ``sim_s`` and ``wall_s`` from the goal to the
+outcome, ``sim_start`` (sim time of the goal), ``wall_start`` (``time.monotonic()``, system-wide, when the goal
+went out), ``final_error_m`` (true pose from ``/ground_truth/odom`` to the goal) and ``contacts``.
 
 With ``--navigator potential_field_navigation`` (``potential_field_navigation.launch``, no SLAM) it waits for
 the node instead of a map and sends the goal in ``odom``. With ``--world FILE`` the JSON also holds
@@ -134,6 +134,7 @@ class _Robot:
         return {
             "reached": word == "reached",
             "sim_s": sim1 - sim0,
+            "sim_start": sim0,
             "wall_s": wall1 - wall0,
             "final_error_m": math.hypot(x - self.goal[0], y - self.goal[1]),
             "contacts": self.contacts,

@@ -14,8 +14,11 @@ speed; every tick wakes every sim-time timer of every node, which with several r
 (multi_robot.launch publishes 20 Hz, what the 10 Hz controllers need). With ``~lockstep`` true the loop never runs
 more than ``~lockstep_period`` of sim time past the last ``cmd_vel`` it received (and publishes the clock where it
 waits), so a controller ticking on sim time keeps up at any rate (see
-:mod:`mrs_nav.sim.lockstep`: free running before the first command and after ``~lockstep_timeout`` wall seconds
-of silence). A bad ``cmd_vel`` (non-finite numbers) is logged and ignored; the watchdog then stops the robot.
+:mod:`mrs_nav.sim.lockstep`: free running before the first command, after ``~lockstep_timeout`` wall seconds of
+silence once no publisher is connected to ``cmd_vel``, and after ``~lockstep_stall_timeout`` while one still is,
+with one period of grace after ``~lockstep_timeout``: a connected controller that is silent is slow or waiting
+for a tick just past the horizon, not gone; each switch is logged once). A bad
+``cmd_vel`` (non-finite numbers) is logged and ignored; the watchdog then stops the robot.
 ``~add_box`` (visualization_msgs/Marker of type CUBE: pose in the world frame, scale = full sizes in m, ``ns``
 its name) puts a box into the world at run time, e.g. across a corridor after the map was made. A goal on
 ``move_base_simple/goal`` (rviz's 2D Nav Goal) that no navigation node listens for is warned of once
@@ -77,11 +80,13 @@ from mrs_nav.sim import (
     LaserParams,
     LockstepConfig,
     LockstepGate,
+    LockstepSwitch,
     MultiRobotSimulator,
     SimulatedRobot,
     SimulatorConfig,
     Twist2D,
 )
+from mrs_nav.sim.lockstep import FREE_RUN_LOG
 
 WHEEL_JOINTS = ("wheel_left_joint", "wheel_right_joint")
 NODE = "simulator"
@@ -147,7 +152,11 @@ class SimulatorNodeConfig:
         sim = SimulatorConfig(
             laser=laser, physics_rate=values["physics_rate"], odom_noise=values["odom_noise"], seed=values["seed"]
         )
-        lockstep = LockstepConfig(period=values["lockstep_period"], timeout=values["lockstep_timeout"])
+        lockstep = LockstepConfig(
+            period=values["lockstep_period"],
+            timeout=values["lockstep_timeout"],
+            stall_timeout=values["lockstep_stall_timeout"],
+        )
         return cls(
             world=resolve_world(values["world"]),
             start=Pose2D(values["x"], values["y"], values["yaw"]),
@@ -233,8 +242,12 @@ class _RobotPorts:
         self.contact_events = -1
         self.scan_pub = rospy.Publisher(prefix + "scan", LaserScan, queue_size=5)
         self.joints_pub = rospy.Publisher(prefix + "joint_states", JointState, queue_size=10)
-        self.gate = LockstepGate(cfg.lockstep) if cfg.lockstep is not None else None
         self.cmd_sub = rospy.Subscriber(prefix + "cmd_vel", Twist, self._on_cmd_vel, queue_size=10, tcp_nodelay=True)
+        self.gate = (
+            LockstepGate(cfg.lockstep, publishers=self.cmd_sub.get_num_connections, on_switch=self._on_lockstep_switch)
+            if cfg.lockstep is not None
+            else None
+        )
         self.set_pose_sub = rospy.Subscriber(f"~{prefix}set_pose", Pose2DMsg, self._on_set_pose, queue_size=1)
 
     def _on_cmd_vel(self, msg: Twist) -> None:
@@ -248,6 +261,24 @@ class _RobotPorts:
             now = self._node.fleet.time
         if self.gate is not None:
             self.gate.on_command(now)
+
+    def _on_lockstep_switch(self, switch: LockstepSwitch) -> None:
+        topic = self.cmd_sub.resolved_name
+        if not switch.free:
+            rospy.loginfo(
+                f"{self.who}lockstep again from sim time {switch.sim_time:.3f} s: a command on {topic} after "
+                f"{switch.silent_s:.1f} s (wall) of free running"
+            )
+        elif switch.publishers > 0:
+            rospy.logwarn(
+                f"{self.who}{FREE_RUN_LOG} {switch.sim_time:.3f} s: {switch.publishers} connected "
+                f"publisher(s) of {topic} silent for {switch.silent_s:.1f} s (wall; ~lockstep_stall_timeout)"
+            )
+        else:
+            rospy.logwarn(
+                f"{self.who}{FREE_RUN_LOG} {switch.sim_time:.3f} s: no publisher on {topic} and no "
+                f"command for {switch.silent_s:.1f} s (wall; ~lockstep_timeout)"
+            )
 
     def _on_set_pose(self, msg: Pose2DMsg) -> None:
         try:

@@ -3,7 +3,7 @@ odometry, commands."""
 
 from mrs_nav.sim.commands import CommandLimiter, Twist2D
 from mrs_nav.sim.laser import LaserParams, Scan
-from mrs_nav.sim.lockstep import LockstepConfig, LockstepGate
+from mrs_nav.sim.lockstep import LockstepConfig, LockstepGate, LockstepSwitch
 from mrs_nav.sim.odometry import Odometry
 from mrs_nav.sim.robot import BurgerParams
 from mrs_nav.sim.simulator import ContactStats, MultiRobotSimulator, SimulatedRobot, Simulator, SimulatorConfig
@@ -15,6 +15,7 @@ __all__ = [
     "LaserParams",
     "LockstepConfig",
     "LockstepGate",
+    "LockstepSwitch",
     "MultiRobotSimulator",
     "Odometry",
     "Scan",

@@ -9,7 +9,7 @@ import time
 import pytest
 
 from mrs_nav.errors import InvalidInputError
-from mrs_nav.sim import LockstepConfig, LockstepGate
+from mrs_nav.sim import LockstepConfig, LockstepGate, LockstepSwitch
 
 
 class FakeWall:
@@ -79,7 +79,84 @@ def test_wait_for_command_returns_at_the_silence_timeout() -> None:
     assert time.monotonic() - start < 1.0
 
 
+class Publishers:
+    """The command topic's connected publishers, as the node's subscriber counts them."""
+
+    def __init__(self, count: int) -> None:
+        self.count = count
+        self.asked = 0
+
+    def __call__(self) -> int:
+        self.asked += 1
+        return self.count
+
+
+def connected_gate(count: int) -> tuple[LockstepGate, FakeWall, Publishers, list[LockstepSwitch]]:
+    wall, publishers, switches = FakeWall(), Publishers(count), []
+    gate = LockstepGate(LockstepConfig(period=0.1, timeout=1.0, stall_timeout=30.0), wall, publishers, switches.append)
+    return gate, wall, publishers, switches
+
+
+def test_a_connected_but_silent_controller_is_waited_for_past_the_short_timeout() -> None:
+    gate, wall, _, switches = connected_gate(1)  # still connected, no command for a while
+    gate.on_command(2.0)
+    wall.now += 0.9
+    assert not gate.may_step(2.1)
+    wall.now += 4.1  # past the short timeout: one period of grace (its tick may lie just past the horizon)
+    assert gate.may_step(2.1)
+    assert not gate.may_step(2.2)
+    assert gate.horizon == pytest.approx(2.2)
+    wall.now += 24.0
+    assert not gate.may_step(2.2)
+    assert switches == []
+    gate.on_command(2.2)  # it comes back: one period from its command, no switch happened
+    assert gate.may_step(2.2)
+    assert not gate.may_step(2.3)
+    assert switches == []
+
+
+def test_a_silent_controller_without_a_connected_publisher_is_gone_after_the_short_timeout() -> None:
+    gate, wall, publishers, switches = connected_gate(1)
+    gate.on_command(2.0)
+    wall.now += 0.5
+    assert not gate.may_step(2.1)
+    assert publishers.asked == 0  # within the short timeout the count is not even asked
+    publishers.count = 0  # killed: its connection closed
+    wall.now += 0.6
+    assert gate.may_step(2.2)
+    assert gate.may_step(50.0)
+    assert switches == [LockstepSwitch(True, 2.2, pytest.approx(1.1), 0)]
+
+
+def test_a_connected_controller_silent_past_the_stall_timeout_is_given_up() -> None:
+    gate, wall, _, switches = connected_gate(2)
+    gate.on_command(2.0)
+    wall.now += 30.5
+    assert gate.may_step(2.2)
+    assert gate.may_step(9.0)
+    assert switches == [LockstepSwitch(True, 2.2, pytest.approx(30.5), 2)]  # reported once, not per step
+    wall.now += 2.0
+    gate.on_command(9.0)  # a command re-engages the lock, reported once
+    assert not gate.may_step(9.1)
+    assert switches[1:] == [LockstepSwitch(False, 9.0, pytest.approx(32.5))]
+    gate.on_command(9.1)
+    assert len(switches) == 2
+
+
+def test_wait_for_command_waits_for_a_connected_controller_past_the_short_timeout() -> None:
+    gate = LockstepGate(LockstepConfig(period=0.1, timeout=0.05, stall_timeout=30.0), publishers=lambda: 1)
+    gate.on_command(0.0)
+    start = time.monotonic()
+    assert not gate.wait_for_command(0.2, 0.3)  # no free run at 0.05 s (past the grace): it gives up at max_wait
+    assert 0.25 < time.monotonic() - start < 1.0
+
+
 @pytest.mark.parametrize(("period", "timeout"), [(0.0, 1.0), (0.1, -1.0), (math.nan, 1.0), (0.1, math.inf)])
 def test_bad_parameters_are_refused(period: float, timeout: float) -> None:
     with pytest.raises(InvalidInputError, match="lockstep"):
         LockstepConfig(period=period, timeout=timeout)
+
+
+def test_a_stall_timeout_below_the_short_timeout_is_refused() -> None:
+    with pytest.raises(InvalidInputError, match="lockstep_stall_timeout"):
+        LockstepConfig(timeout=2.0, stall_timeout=1.0)
