@@ -29,9 +29,8 @@ class Spin:
 
 class Drive:
     """Drives ``waypoints`` (by default the office's corridor loop; or ``driver``'s commands) from
-    /ground_truth/odom, a command every 0.1 s of sim time while ``on`` and a zero twist as often in between (as a
-    controller in lockstep does: the simulator waits long for one still connected but silent), and pairs each
-    /amcl_pose with the true pose of the same stamp."""
+    /ground_truth/odom, a command every 0.1 s of sim time while ``on``, and pairs each /amcl_pose with the true
+    pose of the same stamp."""
 
     def __init__(
         self,
@@ -72,12 +71,11 @@ class Drive:
             # A stamp rounds to the nanosecond and now + 0.1 to the float: without the slack the command due at
             # t + 0.1 can wait for the next ground truth, past the lockstep horizon, and the simulator then waits a
             # whole lockstep_timeout of wall time for it (the loop ran at half real time instead of 3x).
-            due = self.now >= self.next_command - _SLACK
+            due = self.on and self.now >= self.next_command - _SLACK
             if due:
                 self.next_command = self.now + COMMAND_PERIOD
-            driving = self.on
         if due:
-            command = self.driver.command(pose) if driving else Twist2D(0.0, 0.0)
+            command = self.driver.command(pose)
             twist = self.Twist()
             twist.linear.x, twist.angular.z = command.v, command.omega
             self.cmd.publish(twist)

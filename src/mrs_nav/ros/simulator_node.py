@@ -260,7 +260,7 @@ class _RobotPorts:
             self.robot.set_command(twist.v, twist.omega)
             now = self._node.fleet.time
         if self.gate is not None:
-            self.gate.on_command(now)
+            self.gate.on_command(now, moving=twist.v != 0.0 or twist.omega != 0.0)
 
     def _on_lockstep_switch(self, switch: LockstepSwitch) -> None:
         topic = self.cmd_sub.resolved_name

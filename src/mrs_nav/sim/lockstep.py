@@ -14,18 +14,22 @@ the pair live whatever the controller does, each after a silence ``s`` (wall sec
   for its map or tf, which it can only get with time moving);
 * ``s > timeout`` with no publisher connected to the command topic: the controller is gone (killed: its TCP
   connection closed), the simulation runs freely;
-* ``s > stall_timeout`` with a publisher still connected: a controller in lockstep commands every tick (the
-  navigation nodes send a zero twist even when idle), so a connected one that is silent is not idle. Running on
-  would drive the robot blind on its last command until the watchdog stops it (0.3 s of sim time), so the
-  simulation waits much longer for it, and only gives up on one that stays hung.
+* ``s > timeout`` when the last command was a stop (zero twist): the robot stands still, so running on drives
+  nobody blind; a controller idle between goals (a navigation node launched without its heartbeat goes silent
+  after a goal ends or is cancelled) keeps the old release;
+* ``s > stall_timeout`` with a publisher still connected and the last command a motion: a controller in the
+  middle of a drive commands every tick, so a connected one that is silent is slow, not idle. Running on would
+  drive the robot blind on its last command until the watchdog stops it (0.3 s of sim time), so the simulation
+  waits much longer for it, and only gives up on one that stays hung.
 
-A connected controller silent for ``timeout`` gets one period of grace first: the horizon moves to
-``t_c + 2 period`` and the simulation waits there. A rospy timer on sim time sleeps until ``T + period +
-(c2 - c1)`` for its tick ``T``, where ``c1 <= c2`` are its two readings of the clock in ``Rate.sleep`` and
-``rospy.sleep``; the simulation may move in between (up to ``t_c + period``, ``t_c >= c1 >= T``), so the next tick
-can fall past the horizon, up to ``t_c + 2 period``. Without the grace both sides wait for each other (measured: a
-loaded machine's navigation node idle in ``rospy.sleep`` while the simulator waited for it); with it the robot
-runs at most one period (0.1 s, 2.2 cm at 0.22 m/s) past its controller's last look, instead of free running.
+A connected controller silent for ``timeout`` in the middle of a motion gets one period of grace first: the
+horizon moves to ``t_c + 2 period`` and the simulation waits there. A rospy timer on sim time sleeps until
+``T + period + (c2 - c1)`` for its tick ``T``, where ``c1 <= c2`` are its two readings of the clock in
+``Rate.sleep`` and ``rospy.sleep``; the simulation may move in between (up to ``t_c + period``, ``t_c >= c1 >=
+T``), so the next tick can fall past the horizon, up to ``t_c + 2 period``. Without the grace both sides wait
+for each other (measured: a loaded machine's navigation node idle in ``rospy.sleep`` while the simulator
+waited for it); with it the robot runs at most one period (0.1 s, 2.2 cm at 0.22 m/s) past its controller's last
+look, instead of free running.
 
 Free running lasts until the next command re-engages the lock. Each switch is reported once through
 ``on_switch`` (a :class:`LockstepSwitch`), never per step.
@@ -110,10 +114,13 @@ class LockstepGate:
         self._command_sim_time: float | None = None
         self._command_wall_time = -math.inf
         self._free = False  # released by a silence, until the next command
+        self._moving = False  # whether the last command asked for motion
 
-    def on_command(self, sim_time: float) -> None:
-        """A command arrived while the simulation stood at ``sim_time`` (s): extend the horizon from there."""
+    def on_command(self, sim_time: float, moving: bool = True) -> None:
+        """A command arrived while the simulation stood at ``sim_time`` (s): extend the horizon from there.
+        ``moving``: it asks for motion (False: a stop, a zero twist)."""
         with self._changed:
+            self._moving = moving
             now = self._wall_clock()
             if self._free:
                 self._free = False
@@ -145,7 +152,7 @@ class LockstepGate:
             return self._command_sim_time + self.config.period
         # asked only once the short timeout has passed: never per step of a controller that keeps up
         publishers = self._publishers()
-        if publishers > 0 and silent <= self.config.stall_timeout:
+        if publishers > 0 and self._moving and silent <= self.config.stall_timeout:
             # connected: starved or waiting for a tick just past the horizon; one period of grace, then wait for it
             return self._command_sim_time + 2.0 * self.config.period
         self._free = True

@@ -115,6 +115,19 @@ def test_a_connected_but_silent_controller_is_waited_for_past_the_short_timeout(
     assert switches == []
 
 
+def test_a_connected_controller_silent_after_a_stop_releases_the_simulation_after_the_short_timeout() -> None:
+    """A navigation node without its heartbeat goes silent once a goal ends or is cancelled, its last command a
+    zero twist: the robot stands still, so running on drives nobody blind (a 30 s wait stalled every cancel)."""
+    gate, wall, _, switches = connected_gate(1)
+    gate.on_command(2.0, moving=False)
+    wall.now += 0.9
+    assert not gate.may_step(2.1)
+    wall.now += 0.2
+    assert gate.may_step(2.1)
+    assert gate.may_step(50.0)
+    assert switches == [LockstepSwitch(True, 2.1, pytest.approx(1.1), 1)]
+
+
 def test_a_silent_controller_without_a_connected_publisher_is_gone_after_the_short_timeout() -> None:
     gate, wall, publishers, switches = connected_gate(1)
     gate.on_command(2.0)
