@@ -54,27 +54,43 @@ def test_lockstep_holds_the_sim_within_one_period_of_the_last_command_and_runs_f
             time.sleep(1.0)
             assert samples[-1] - free0 > 3.0, "without a controller the simulation should run freely"
             # one command: the simulation stops one period (0.1 s) after it, for as long as no other comes
-            cmd.publish(Twist())
+            turn = Twist()
+            turn.angular.z = 0.2  # in place: a motion that cannot touch the arena
+            cmd.publish(turn)
             time.sleep(0.25)
             held = samples[-1]
             time.sleep(0.3)  # still well inside the 1 s wall-clock silence timeout
             assert samples[-1] == held
             # the next command releases exactly one more period
-            cmd.publish(Twist())
+            cmd.publish(turn)
             wait_for(lambda: samples[-1] > held, 5.0, "the next command to release the simulation")
             time.sleep(0.2)
             assert samples[-1] == pytest.approx(held + 0.1, abs=1e-6)
-            # the controller falls silent but stays connected (not gone): after the 1 s timeout one period of grace
-            # (a rospy timer's tick can fall just past the horizon), then held
+            # the controller falls silent mid-motion but stays connected (not gone): after the 1 s timeout one period
+            # of grace (a rospy timer's tick can fall just past the horizon), then held
             time.sleep(2.0)
             assert samples[-1] == pytest.approx(held + 0.2, abs=1e-6)
-            # the controller goes away (its connection closes): within the 1 s timeout the simulation runs freely
+            # a stop, then silence from a connected controller (a navigation node idle after its goal): the robot
+            # stands still, so the simulation runs on after the 1 s timeout
+            cmd.publish(Twist())
+            wait_for(lambda: samples[-1] > held + 0.2, 5.0, "the stop to release the simulation")
+            stopped = samples[-1]
+            time.sleep(2.0)
+            assert samples[-1] - stopped > 3.0, "a controller silent after a stop should not hold the simulation"
+            # a motion locks it again; then the controller goes away (its connection closes): within the 1 s
+            # timeout the simulation runs freely
+            cmd.publish(turn)
+            time.sleep(0.5)
+            relocked = samples[-1]
+            time.sleep(0.3)
+            assert samples[-1] == relocked, "a motion command should lock the simulation again"
             cmd.unregister()
             released = samples[-1]
             time.sleep(2.0)
             assert samples[-1] - released > 3.0
         log = max(ros_master.log_dir.glob("lockstep-*.log"), key=lambda p: p.stat().st_mtime).read_text()
-        assert log.count(FREE_RUN_LOG) == 1, "one warning for the one switch to free running"
+        assert log.count(FREE_RUN_LOG) == 1, "one warning for the one switch to free running on a motion"
+        assert log.count("lockstep released while stopped") == 1
         assert re.search(rf"{FREE_RUN_LOG} [0-9.]+ s: no publisher on /cmd_vel and no command for [0-9.]+ s", log)
     finally:
         sub.unregister()

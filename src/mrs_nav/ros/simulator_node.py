@@ -269,6 +269,12 @@ class _RobotPorts:
                 f"{self.who}lockstep again from sim time {switch.sim_time:.3f} s: a command on {topic} after "
                 f"{switch.silent_s:.1f} s (wall) of free running"
             )
+        elif switch.publishers > 0 and not switch.moving:
+            # a controller idle after a stop: the robot stands still, nobody is driven blind
+            rospy.loginfo(
+                f"{self.who}lockstep released while stopped: time runs freely from sim time {switch.sim_time:.3f} s; "
+                f"the last command on {topic} was a stop, none for {switch.silent_s:.1f} s (wall; ~lockstep_timeout)"
+            )
         elif switch.publishers > 0:
             rospy.logwarn(
                 f"{self.who}{FREE_RUN_LOG} {switch.sim_time:.3f} s: {switch.publishers} connected "

@@ -78,13 +78,15 @@ class LockstepConfig:
 @dataclass(frozen=True)
 class LockstepSwitch:
     """A switch between lockstep and free running, at ``sim_time`` (s). To free running (``free``): after
-    ``silent_s`` wall seconds without a command, with ``publishers`` connected then. Back to lockstep: a
-    command arrived after ``silent_s`` wall seconds of free running."""
+    ``silent_s`` wall seconds without a command, with ``publishers`` connected then and the last command asking
+    for motion (``moving``) or a stop. Back to lockstep: a command arrived after ``silent_s`` wall seconds of free
+    running."""
 
     free: bool
     sim_time: float
     silent_s: float
     publishers: int = 0
+    moving: bool = True
 
 
 def _no_publishers() -> int:
@@ -157,7 +159,7 @@ class LockstepGate:
             return self._command_sim_time + 2.0 * self.config.period
         self._free = True
         at = self._command_sim_time if sim_time is None else sim_time
-        self._report(LockstepSwitch(True, at, silent, publishers))
+        self._report(LockstepSwitch(True, at, silent, publishers, self._moving))
         return math.inf
 
     def _report(self, switch: LockstepSwitch) -> None:

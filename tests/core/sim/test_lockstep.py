@@ -125,7 +125,7 @@ def test_a_connected_controller_silent_after_a_stop_releases_the_simulation_afte
     wall.now += 0.2
     assert gate.may_step(2.1)
     assert gate.may_step(50.0)
-    assert switches == [LockstepSwitch(True, 2.1, pytest.approx(1.1), 1)]
+    assert switches == [LockstepSwitch(True, 2.1, pytest.approx(1.1), 1, moving=False)]
 
 
 def test_a_silent_controller_without_a_connected_publisher_is_gone_after_the_short_timeout() -> None:
