@@ -1,6 +1,8 @@
-"""The simulator's cmd_vel watchdog through the real nodes: the robot drives to a goal under rrt_navigation, the
-navigation node is killed with SIGKILL (no zero command on the way out), and the ground truth must show the robot
-standing (speed below 0.01 m/s) within 0.5 s of sim time of the last /cmd_vel."""
+"""The simulator's cmd_vel watchdog and lockstep through the real nodes: the robot drives to a goal under
+rrt_navigation, then the navigation node is killed with SIGKILL (no zero command on the way out), and the ground
+truth must show the robot standing (speed below 0.01 m/s) within 0.5 s of sim time of the last /cmd_vel; or the
+node is frozen (SIGSTOP: its connection stays open, as a node starved of CPU), and the simulation must wait for it
+instead of driving the robot blind on its last command."""
 
 from __future__ import annotations
 
@@ -8,6 +10,7 @@ import math
 import os
 import signal
 import threading
+import time
 from typing import Any
 
 import pytest
@@ -19,6 +22,7 @@ pytestmark = pytest.mark.ros
 
 STOPPED = 0.01  # m/s
 WITHIN = 0.5  # s of sim time after the last /cmd_vel
+PERIOD = 0.1  # s of sim time: ~lockstep_period, the navigation node's control period
 
 
 class Speeds:
@@ -97,3 +101,54 @@ def test_the_robot_stops_within_half_a_second_of_its_command_source_dying(
     stopped = speeds.stopped_after(speeds.last_command)
     print(f"stopped {stopped:.3f} s of sim time after the last /cmd_vel")
     assert stopped <= WITHIN
+
+
+def test_a_frozen_navigation_node_holds_the_lockstep_simulation_instead_of_letting_the_robot_run_blind(
+    ros_master: RosMaster, rospy_node: Any
+) -> None:
+    """Before, the simulator ran freely after 1 s of wall-clock silence whoever was connected: the robot drove on
+    its last command until the watchdog (0.3 s of sim time, 6.6 cm at full speed), the likely cause of the
+    contact bench's one touch on a loaded machine."""
+    rospy = rospy_node
+    from geometry_msgs.msg import PoseStamped
+    from nav_msgs.msg import OccupancyGrid
+
+    speeds = Speeds(rospy)
+    with (
+        ros_master.launch("simulation.launch", "real_time_factor:=0", "lockstep:=true", "x:=-1.5", "y:=-1.5"),
+        ros_master.launch("rrt_navigation.launch", "slam:=false", "seed:=3"),
+    ):
+        correction = IdentityCorrection(rospy)
+        map_pub = rospy.Publisher("/map", OccupancyGrid, queue_size=1, latch=True)
+        goal_pub = rospy.Publisher("/move_base_simple/goal", PoseStamped, queue_size=1, latch=True)
+        pid = 0
+        try:
+            map_pub.publish(world_map_msg(rospy, "simple.world"))
+            wait_for(lambda: map_pub.get_num_connections() > 0, 60.0, "the navigation node on /map")
+            wait_for(lambda: goal_pub.get_num_connections() > 0, 60.0, "the navigation node on the goal topic")
+            goal = PoseStamped()
+            goal.header.frame_id = "map"
+            goal.pose.position.x, goal.pose.position.y, goal.pose.orientation.w = 1.5, -1.5, 1.0
+            goal_pub.publish(goal)
+            wait_for(lambda: speeds.speed() > 0.15, 60.0, "the robot at cruising speed")
+            pid = node_pid(ros_master, "/rrt_navigation")
+            os.kill(pid, signal.SIGSTOP)
+            time.sleep(3.0)  # wall: three times ~lockstep_timeout
+            frozen_at = speeds.last_command
+            advanced = rospy.get_time() - frozen_at
+            os.kill(pid, signal.SIGCONT)
+            pid = 0
+            wait_for(lambda: speeds.last_command > frozen_at, 60.0, "the navigation node commanding again")
+            wait_for(lambda: speeds.speed() > 0.15, 60.0, "the robot driving on")
+        finally:
+            if pid:
+                os.kill(pid, signal.SIGCONT)
+            correction.close()
+            map_pub.unregister()
+            goal_pub.unregister()
+            speeds.close()
+    print(f"sim time advanced {advanced:.3f} s past the frozen node's last /cmd_vel in 3 s of wall time")
+    # one period of lockstep and one of grace (a rospy timer's tick can fall just past the horizon), plus up to a
+    # period by which this process's clock can lag the simulator's when it hears the command. Free running (the
+    # old rule) makes this many seconds.
+    assert advanced < 3.0 * PERIOD
