@@ -24,8 +24,9 @@ from mrs_nav.errors import InvalidInputError
 
 POSE_TYPE = "geometry_msgs/PoseStamped"
 # Wall seconds a goal waits for the move_base server to be connected (goal, cancel, feedback and result topics)
-# before it is refused: right after start-up the connections may still be under way.
-SERVER_WAIT = 10.0
+# before it is refused: right after start-up the connections may still be under way, and move_base (like
+# rrt_navigation) starts its action only once it has a map, which SLAM on a loaded machine can take a while to make.
+SERVER_WAIT = 60.0
 
 
 def _serialized(msg: PoseStamped) -> bytes:
