@@ -17,6 +17,7 @@ import array
 import json
 import sys
 import time
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -104,6 +105,15 @@ def _result(future: Any, deadline: float) -> Any:
     return future.result()
 
 
+def _request(node: Node, deadline: float, send: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
+    """The response to an action client's request ``send(*args, **kwargs)``, sent from the executor's thread:
+    rclpy (Jazzy) files a request's future only after sending it, and a response that the spinning thread takes
+    in between is dropped ("Ignoring unexpected goal response"), its future never done."""
+    if node.executor is None:
+        raise SystemExit("bench_peer: the node spins in no executor")
+    return _result(_result(node.executor.create_task(send, *args, **kwargs), deadline), deadline)
+
+
 def navigate(node: Node, out: Path, goal_xy: tuple[float, float], after: Path, timeout: float) -> None:
     deadline = time.monotonic() + timeout
     client = ActionClient(node, NavigateToPose, "navigate_to_pose")
@@ -121,8 +131,8 @@ def navigate(node: Node, out: Path, goal_xy: tuple[float, float], after: Path, t
     def on_feedback(_msg: Any) -> None:
         feedbacks[0] += 1
 
-    handle = _result(client.send_goal_async(goal, feedback_callback=on_feedback), deadline)
-    response = _result(handle.get_result_async(), deadline)
+    handle = _request(node, deadline, client.send_goal_async, goal, feedback_callback=on_feedback)
+    response = _request(node, deadline, handle.get_result_async)
     out.write_text(
         json.dumps(
             {"status": response.status, "error_code": response.result.error_code, "feedbacks": feedbacks[0],
