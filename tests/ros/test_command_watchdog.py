@@ -6,11 +6,13 @@ instead of driving the robot blind on its last command."""
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import signal
 import threading
 import time
+from collections.abc import Iterator
 from typing import Any
 
 import pytest
@@ -67,14 +69,13 @@ class Speeds:
             sub.unregister()
 
 
-def test_the_robot_stops_within_half_a_second_of_its_command_source_dying(
-    ros_master: RosMaster, rospy_node: Any
-) -> None:
-    rospy = rospy_node
+@contextlib.contextmanager
+def driving(ros_master: RosMaster, rospy: Any, speeds: Speeds) -> Iterator[int]:
+    """The simulator in lockstep and rrt_navigation on the arena's map, the robot sent 3 m east along the south
+    side (seconds at full speed); yields the navigation node's pid once the robot is at cruising speed."""
     from geometry_msgs.msg import PoseStamped
     from nav_msgs.msg import OccupancyGrid
 
-    speeds = Speeds(rospy)
     with (
         ros_master.launch("simulation.launch", "real_time_factor:=0", "lockstep:=true", "x:=-1.5", "y:=-1.5"),
         ros_master.launch("rrt_navigation.launch", "slam:=false", "seed:=3"),
@@ -89,15 +90,26 @@ def test_the_robot_stops_within_half_a_second_of_its_command_source_dying(
             goal = PoseStamped()
             goal.header.frame_id = "map"
             goal.pose.position.x, goal.pose.position.y, goal.pose.orientation.w = 1.5, -1.5, 1.0
-            goal_pub.publish(goal)  # 3 m east along the south side: seconds at full speed
+            goal_pub.publish(goal)
             wait_for(lambda: speeds.speed() > 0.15, 60.0, "the robot at cruising speed")
-            os.kill(node_pid(ros_master, "/rrt_navigation"), signal.SIGKILL)
-            wait_for(lambda: rospy.get_time() > speeds.last_command + 2.0, 60.0, "2 s of sim time without commands")
+            yield node_pid(ros_master, "/rrt_navigation")
         finally:
             correction.close()
             map_pub.unregister()
             goal_pub.unregister()
-            speeds.close()
+
+
+def test_the_robot_stops_within_half_a_second_of_its_command_source_dying(
+    ros_master: RosMaster, rospy_node: Any
+) -> None:
+    rospy = rospy_node
+    speeds = Speeds(rospy)
+    try:
+        with driving(ros_master, rospy, speeds) as pid:
+            os.kill(pid, signal.SIGKILL)
+            wait_for(lambda: rospy.get_time() > speeds.last_command + 2.0, 60.0, "2 s of sim time without commands")
+    finally:
+        speeds.close()
     stopped = speeds.stopped_after(speeds.last_command)
     print(f"stopped {stopped:.3f} s of sim time after the last /cmd_vel")
     assert stopped <= WITHIN
@@ -110,43 +122,20 @@ def test_a_frozen_navigation_node_holds_the_lockstep_simulation_instead_of_letti
     its last command until the watchdog (0.3 s of sim time, 6.6 cm at full speed), the likely cause of the
     contact bench's one touch on a loaded machine."""
     rospy = rospy_node
-    from geometry_msgs.msg import PoseStamped
-    from nav_msgs.msg import OccupancyGrid
-
     speeds = Speeds(rospy)
-    with (
-        ros_master.launch("simulation.launch", "real_time_factor:=0", "lockstep:=true", "x:=-1.5", "y:=-1.5"),
-        ros_master.launch("rrt_navigation.launch", "slam:=false", "seed:=3"),
-    ):
-        correction = IdentityCorrection(rospy)
-        map_pub = rospy.Publisher("/map", OccupancyGrid, queue_size=1, latch=True)
-        goal_pub = rospy.Publisher("/move_base_simple/goal", PoseStamped, queue_size=1, latch=True)
-        pid = 0
-        try:
-            map_pub.publish(world_map_msg(rospy, "simple.world"))
-            wait_for(lambda: map_pub.get_num_connections() > 0, 60.0, "the navigation node on /map")
-            wait_for(lambda: goal_pub.get_num_connections() > 0, 60.0, "the navigation node on the goal topic")
-            goal = PoseStamped()
-            goal.header.frame_id = "map"
-            goal.pose.position.x, goal.pose.position.y, goal.pose.orientation.w = 1.5, -1.5, 1.0
-            goal_pub.publish(goal)
-            wait_for(lambda: speeds.speed() > 0.15, 60.0, "the robot at cruising speed")
-            pid = node_pid(ros_master, "/rrt_navigation")
+    try:
+        with driving(ros_master, rospy, speeds) as pid:
             os.kill(pid, signal.SIGSTOP)
-            time.sleep(3.0)  # wall: three times ~lockstep_timeout
-            frozen_at = speeds.last_command
-            advanced = rospy.get_time() - frozen_at
-            os.kill(pid, signal.SIGCONT)
-            pid = 0
+            try:
+                time.sleep(3.0)  # wall: three times ~lockstep_timeout
+                frozen_at = speeds.last_command
+                advanced = rospy.get_time() - frozen_at
+            finally:
+                os.kill(pid, signal.SIGCONT)
             wait_for(lambda: speeds.last_command > frozen_at, 60.0, "the navigation node commanding again")
             wait_for(lambda: speeds.speed() > 0.15, 60.0, "the robot driving on")
-        finally:
-            if pid:
-                os.kill(pid, signal.SIGCONT)
-            correction.close()
-            map_pub.unregister()
-            goal_pub.unregister()
-            speeds.close()
+    finally:
+        speeds.close()
     print(f"sim time advanced {advanced:.3f} s past the frozen node's last /cmd_vel in 3 s of wall time")
     # one period of lockstep and one of grace (a rospy timer's tick can fall just past the horizon), plus up to a
     # period by which this process's clock can lag the simulator's when it hears the command. Free running (the
