@@ -140,7 +140,7 @@ class RrtNavigationNode:
         self._server = RepeatedIdActionServer(
             "move_base", MoveBaseAction, self._on_action_goal, self._on_action_cancel, auto_start=False
         )
-        self._taking_goals = threading.Event()  # the action server is started (on the first map)
+        self._taking_goals = False  # the action server is started (on the first map); set under _early_lock
         self._early_goal: PoseStamped | None = None  # the last rviz goal sent before then, taken once started
         self._early_lock = threading.Lock()  # one of the two happens first: the goal kept, or the server up
         self._goal_ids = itertools.count(1)
@@ -195,7 +195,7 @@ class RrtNavigationNode:
             return
         with self._lock:
             self.navigator.set_map(grid, rospy.get_time())
-        if not self._taking_goals.is_set():
+        if not self._taking_goals:
             self._start_action_server(grid)
 
     def _start_action_server(self, grid: OccupancyGrid) -> None:
@@ -207,7 +207,7 @@ class RrtNavigationNode:
             self._server.start()
         keep_status_timer(self._server)
         with self._early_lock:
-            self._taking_goals.set()
+            self._taking_goals = True
             early, self._early_goal = self._early_goal, None
         rows, cols = grid.values.shape
         rospy.loginfo(
@@ -321,7 +321,7 @@ class RrtNavigationNode:
         before the first map (a latched goal, a script quicker than the map) is kept and taken once the action is
         up: actionlib would drop it without a word while its server is not started."""
         with self._early_lock:
-            if not self._taking_goals.is_set():
+            if not self._taking_goals:
                 self._early_goal = msg
                 where = msg.pose.position
                 rospy.loginfo(f"rrt_navigation: goal ({where.x:.2f}, {where.y:.2f}) kept until the first map arrives")

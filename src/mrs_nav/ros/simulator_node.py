@@ -15,9 +15,10 @@ speed; every tick wakes every sim-time timer of every node, which with several r
 more than ``~lockstep_period`` of sim time past the last ``cmd_vel`` it received (and publishes the clock where it
 waits), so a controller ticking on sim time keeps up at any rate (see
 :mod:`mrs_nav.sim.lockstep`: free running before the first command, after ``~lockstep_timeout`` wall seconds of
-silence once no publisher is connected to ``cmd_vel``, and after ``~lockstep_stall_timeout`` while one still is,
-with one period of grace after ``~lockstep_timeout``: a connected controller that is silent is slow or waiting
-for a tick just past the horizon, not gone; each switch is logged once). A bad
+silence once no publisher is connected to ``cmd_vel`` or the last command was a stop, and after
+``~lockstep_stall_timeout`` while one still is and the last command a motion, with one period of grace after
+``~lockstep_timeout``: a connected controller that is silent mid-drive is slow or waiting for a tick just past the
+horizon, not gone; each switch is logged once). A bad
 ``cmd_vel`` (non-finite numbers) is logged and ignored; the watchdog then stops the robot.
 ``~add_box`` (visualization_msgs/Marker of type CUBE: pose in the world frame, scale = full sizes in m, ``ns``
 its name) puts a box into the world at run time, e.g. across a corridor after the map was made. A goal on

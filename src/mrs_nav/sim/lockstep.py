@@ -57,7 +57,8 @@ FREE_RUN_LOG = "lockstep released: running freely from sim time"
 class LockstepConfig:
     """``period``: sim seconds the simulation may run past the last command (one control period, 0.1 s for the
     10 Hz navigation nodes); ``timeout``: wall seconds of silence after which it runs freely when no publisher
-    is connected; ``stall_timeout``: the same while a publisher is still connected (a starved controller)."""
+    is connected or the last command was a stop; ``stall_timeout``: the same while a publisher is still connected
+    and the last command asked for motion (a starved controller)."""
 
     period: float = 0.1
     timeout: float = 1.0
