@@ -113,6 +113,35 @@ def _point(x1: float, y1: float, yaw: float, curvature: float, s: float) -> tupl
     return x1 + chord * math.cos(heading), y1 + chord * math.sin(heading)
 
 
+@numba.njit(_F2(_F2, _F1, _F2, _F), cache=True)
+def chain_poses(start: FloatArray, yaw: FloatArray, target: FloatArray, step: float) -> FloatArray:
+    """Poses ``(M, 3)`` along the chain of arcs from poses ``(start[i], yaw[i])`` to ``target[i]``, each sampled at
+    equal arc-length spacing of at most ``step`` metres as :func:`mrs_nav.trees.arcs.sample` does, with each arc's
+    first pose left out after the first arc's (it repeats the previous arc's last one)."""
+    count = len(yaw)
+    segments = np.empty(count, dtype=np.intp)
+    curvature = np.empty(count)
+    length = np.empty(count)
+    total = 1
+    for i in range(count):
+        _, curvature[i], length[i], _ = connect_one(start[i, 0], start[i, 1], yaw[i], target[i, 0], target[i, 1])
+        segments[i] = _segments(length[i], step)
+        total += segments[i]
+    out = np.empty((total, 3))
+    row = 0
+    for i in range(count):
+        for k in range(0 if i == 0 else 1, segments[i] + 1):
+            s = length[i] * (k / segments[i])
+            half = 0.5 * curvature[i] * s
+            chord = s * math.sin(half) / half if half != 0.0 else s
+            heading = yaw[i] + half
+            out[row, 0] = start[i, 0] + chord * math.cos(heading)
+            out[row, 1] = start[i, 1] + chord * math.sin(heading)
+            out[row, 2] = (heading + half + math.pi) % (2.0 * math.pi) - math.pi
+            row += 1
+    return out
+
+
 @numba.njit(_B(_F, _F, _F, _F, _F, _GRID), cache=True)
 def arc_free(x1: float, y1: float, yaw: float, curvature: float, length: float, grid: GridArgs) -> bool:
     """True when every point of the arc lies in a free cell: samples every resolution or less in ``cons``; failing

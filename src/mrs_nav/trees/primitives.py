@@ -1,39 +1,94 @@
 """The obvious first paths RRT* tries before sampling: turn on a circle, then drive straight to the goal.
 
 From the start pose, a circle of radius ``r`` turning left or right; the point where the line to the goal leaves
-it tangentially splits the way into two of the planner's own edges: the arc from the start pose to that point
-(the circle itself, since an arc is tangent to the start heading), then a straight arc on to the goal. This is
-the turn-straight family of Dubins paths, drawn with the course's arcs: the planner checks both pieces exactly
-like any other edge (feasible, within ``max_alpha``, collision-free), so nothing here needs to be exact.
+it tangentially splits the way into the planner's own edges: the turn from the start pose to that point (the
+circle itself, since an arc is tangent to the start heading), then a straight arc on to the goal. This is the
+turn-straight family of Dubins paths, drawn with the course's arcs: every piece is checked exactly like any other
+edge (:func:`mrs_nav.trees.kernels.checked_arc`: feasible, within ``max_alpha``, collision-free), so nothing here
+needs to be exact.
+
+An arc turns by twice its ``alpha``, so one edge turns by less than ``2 max_alpha`` (half a turn at most). A
+longer turn, as a goal behind the robot needs, is split into equal pieces on the same circle, each one an edge.
+
+The candidates are laid out, ordered and checked in one compiled call: this is the first thing every query
+does, and a goal in the open is answered by it alone.
 """
+
+# ruff: noqa: PLR0917
 
 from __future__ import annotations
 
 import math
 
-from mrs_nav.geometry import FloatArray, Pose2D
+import numba
+import numpy as np
+from numba import types as nt
+
+from mrs_nav.geometry import FloatArray
+from mrs_nav.trees.kernels import GridArgs, checked_arc
+
+_F = nt.float64
+_F1 = nt.Array(_F, 1, "C")
+_F2 = nt.Array(_F, 2, "C")
+_GRID = nt.Tuple((nt.Array(nt.boolean, 2, "C"), nt.Array(nt.boolean, 2, "C"), _F, _F, _F, _F, _F))  # type: ignore[no-untyped-call]
 
 #: Turning radii (m) of the candidate circles; those below the planner's minimum turning radius are skipped.
-TURN_RADII = (0.25, 0.5, 1.0, 2.0)
+TURN_RADII = np.array([0.25, 0.5, 1.0, 2.0])
+# A piece of a split turn stays this far (rad) below the largest turn one edge allows.
+_TURN_MARGIN = 1e-3
 
 
-def turn_points(start: Pose2D, goal: FloatArray, min_turning_radius: float = 0.0) -> list[tuple[float, float, float]]:
-    """``(length, x, y)`` of each turn-then-straight way from ``start`` to ``goal`` (x, y): its length (m) and the
-    point where the turn ends, shortest first; none for a goal inside a circle."""
-    out = []
-    gx, gy = float(goal[0]), float(goal[1])
-    for r in TURN_RADII:
+@numba.njit(_F2(_F, _F, _F, _F, _F, _F1, _F, _F, _GRID), cache=True)
+def turn_then_straight(
+    x: float,
+    y: float,
+    yaw: float,
+    gx: float,
+    gy: float,
+    radii: FloatArray,
+    max_alpha: float,
+    min_turning_radius: float,
+    grid: GridArgs,
+) -> FloatArray:
+    """The shortest free turn-then-straight way from the pose ``(x, y, yaw)`` to ``(gx, gy)`` over circles of
+    ``radii`` on both sides, as rows ``(x, y, end yaw, length)`` of its arcs (the last one ends on the goal), or no
+    rows when none is feasible and free. ``max_alpha`` is the planner's cap (below a right angle)."""
+    count = 2 * len(radii)
+    length = np.full(count, np.inf)
+    centre = np.zeros((count, 2))
+    begin, turn = np.zeros(count), np.zeros(count)
+    for i in range(count):
+        r, side = radii[i // 2], 1.0 if i % 2 == 0 else -1.0  # left (counter-clockwise), right
         if r < min_turning_radius:
             continue
-        for side in (1.0, -1.0):  # left (counter-clockwise), right
-            cx = start.x - side * r * math.sin(start.yaw)
-            cy = start.y + side * r * math.cos(start.yaw)
-            d = math.hypot(gx - cx, gy - cy)
-            if d <= r:
-                continue
-            # The tangent point seen from the centre: the goal's bearing turned back by acos(r / d) on this side.
-            at = math.atan2(gy - cy, gx - cx) - side * math.acos(r / d)
-            begin = math.atan2(start.y - cy, start.x - cx)
-            turn = (side * (at - begin)) % (2.0 * math.pi)
-            out.append((r * turn + math.sqrt(d * d - r * r), cx + r * math.cos(at), cy + r * math.sin(at)))
-    return sorted(out)
+        cx, cy = x - side * r * math.sin(yaw), y + side * r * math.cos(yaw)
+        d = math.hypot(gx - cx, gy - cy)
+        if d <= r:
+            continue  # the goal inside the circle
+        # The tangent point seen from the centre: the goal's bearing turned back by acos(r / d) on this side.
+        at = math.atan2(gy - cy, gx - cx) - side * math.acos(r / d)
+        begin[i] = math.atan2(y - cy, x - cx)
+        turn[i] = side * ((side * (at - begin[i])) % (2.0 * math.pi))
+        centre[i] = cx, cy
+        length[i] = r * abs(turn[i]) + math.sqrt(d * d - r * r)
+    for i in np.argsort(length, kind="mergesort"):
+        if not math.isfinite(length[i]):
+            break
+        r = radii[i // 2]
+        pieces = max(1, math.ceil(abs(turn[i]) / max(2.0 * max_alpha - _TURN_MARGIN, _TURN_MARGIN)))
+        out = np.empty((pieces + 1, 4))
+        px, py, pyaw = x, y, yaw
+        for k in range(pieces + 1):
+            if k < pieces:
+                a = begin[i] + turn[i] * (k + 1) / pieces
+                nx, ny = centre[i, 0] + r * math.cos(a), centre[i, 1] + r * math.sin(a)
+            else:
+                nx, ny = gx, gy
+            piece, pyaw = checked_arc(px, py, pyaw, nx, ny, max_alpha, min_turning_radius, grid)
+            if not math.isfinite(piece):
+                break
+            out[k] = nx, ny, pyaw, piece
+            px, py = nx, ny
+        else:
+            return out
+    return np.zeros((0, 4))

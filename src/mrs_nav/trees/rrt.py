@@ -26,7 +26,7 @@ from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.admissible import grid_refusal
 from mrs_nav.maps.occupancy_grid import IntArray, OccupancyGrid
 from mrs_nav.planning import PlanResult, path_length
-from mrs_nav.trees import arcs
+from mrs_nav.trees import arcs, kernels
 from mrs_nav.trees.tree import ArcTree, Search, budget_used_up
 
 # How many nearest nodes are screened for a parent before falling back to every node within max_step.
@@ -75,8 +75,14 @@ def check_budget(iterations: int | None, time_budget: float | None) -> None:
 
 def check_query(grid: OccupancyGrid, start: Pose2D, goal: FloatArray) -> None:
     """Raise :class:`InvalidInputError` naming the problem when the start or goal is not admissible on ``grid``."""
+    args = kernels.grid_args(grid)
     for what, point in (("start", start.position), ("goal", goal)):
-        why = grid_refusal(grid, float(point[0]), float(point[1]))
+        x, y = float(point[0]), float(point[1])
+        # One compiled lookup answers the usual case (a free cell: what grid_refusal accepts); a refusal is
+        # worded by grid_refusal.
+        if math.isfinite(x) and math.isfinite(y) and kernels.lookup_one(x, y, args[1], args):
+            continue
+        why = grid_refusal(grid, x, y)
         if why:
             raise InvalidInputError(f"{what} ({point[0]:.3f}, {point[1]:.3f}) is {why}")
 

@@ -44,7 +44,7 @@ from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.planning import PlanResult, path_length
 from mrs_nav.trees import arcs, kernels
 from mrs_nav.trees.guide import CorridorSampler
-from mrs_nav.trees.primitives import turn_points
+from mrs_nav.trees.primitives import TURN_RADII, turn_then_straight
 from mrs_nav.trees.rrt import check_budget, check_query
 from mrs_nav.trees.samplers import InformedSampler, UniformSampler
 from mrs_nav.trees.tree import ArcTree, Search, budget_used_up
@@ -114,13 +114,16 @@ class _Planner:
         self.goal = goal
         self.grid = grid
         self.config = config
-        self.tree = ArcTree(start, capacity=4096)
+        self.tree = ArcTree(start, capacity=512)
         self.gamma = config.gamma if config.gamma is not None else default_gamma(grid)
         self.goal_node = -1
         self.grid_args = kernels.grid_args(grid)
         self.limit = arcs.alpha_limit(config.max_alpha)
         self.best_cost = math.inf
         self.best_path: FloatArray | None = None
+        self.best_length = math.inf
+        # Built when first sampled (a query answered by its first path never samples the map).
+        self.uniform: UniformSampler | None = None
         self.informed: InformedSampler | None = None
         self.first_s: float | None = None
         self.history: list[tuple[int, float, float]] = []
@@ -178,19 +181,20 @@ class _Planner:
 
     def try_direct(self) -> None:
         """The obvious paths before any sampling: the single arc to the goal, else the shortest free
-        turn-then-straight pair of arcs (:func:`mrs_nav.trees.primitives.turn_points`)."""
+        turn-then-straight way (:func:`mrs_nav.trees.primitives.turn_then_straight`: the turn in one or more
+        arcs, then a straight arc)."""
         self.try_goal(0, math.inf)
-        start, (gx, gy) = self.start, self.goal
-        mtr = self.config.min_turning_radius
-        for _, px, py in [] if self.goal_node >= 0 else turn_points(start, self.goal, mtr):
-            turn, yaw = kernels.checked_arc(start.x, start.y, start.yaw, px, py, self.limit, mtr, self.grid_args)
-            if not math.isfinite(turn):
-                continue
-            rest, end_yaw = kernels.checked_arc(px, py, yaw, gx, gy, self.limit, mtr, self.grid_args)
-            if math.isfinite(rest):
-                mid = self.tree.add((px, py), yaw, 0, turn)
-                self.goal_node = self.tree.add(self.goal, end_yaw, mid, turn + rest)
-                return
+        if self.goal_node >= 0:
+            return
+        start, mtr = self.start, self.config.min_turning_radius
+        way = turn_then_straight(
+            start.x, start.y, start.yaw, self.goal[0], self.goal[1], TURN_RADII, self.limit, mtr, self.grid_args
+        )
+        node = 0
+        for x, y, yaw, length in way:
+            node = self.tree.add((x, y), yaw, node, float(self.tree.cost[node] + length))
+        if len(way):
+            self.goal_node = node
 
     def improve(self, iteration: int) -> bool:
         """Keep the path to the goal node when it is shorter than the best so far (and start sampling the new
@@ -201,16 +205,25 @@ class _Planner:
         # Arc cost and sampled-path length differ by the chords' sag (< 0.1 %): the kept path must be
         # shorter in the reported length too, so that the reported length never grows.
         self.best_cost = float(tree.cost[g])
-        if self.config.informed:
-            self.informed = InformedSampler(self.grid, self.start.position, self.goal, self.best_cost)
+        self.informed = None  # the informed set shrank
         path = tree.path_poses(tree.branch(g), self.grid.resolution)
         length = path_length(path)
-        if self.best_path is None or length < path_length(self.best_path):
-            self.best_path = path
+        if length < self.best_length:
+            self.best_path, self.best_length = path, length
             seconds = self.clock() - self.t0
             self.first_s = seconds if self.first_s is None else self.first_s
             self.history.append((iteration, seconds, length))
         return True
+
+    def free_sample(self, rng: np.random.Generator) -> FloatArray:
+        """A free position uniform in the informed set once a path exists (with ``informed``), else on the map."""
+        if self.config.informed and math.isfinite(self.best_cost):
+            if self.informed is None:
+                self.informed = InformedSampler(self.grid, self.start.position, self.goal, self.best_cost)
+            return self.informed.sample(rng)
+        if self.uniform is None:
+            self.uniform = UniformSampler(self.grid)
+        return self.uniform.sample(rng)
 
 
 def grow_rrt_star(
@@ -236,7 +249,6 @@ def grow_rrt_star(
     iteration = 0
     planner.try_direct()
     solved = planner.improve(iteration)
-    uniform = UniformSampler(grid)
     # Goal and guided samples are drawn only until a path exists: with one already, the guide is not laid out.
     guide = (
         CorridorSampler.towards(
@@ -257,10 +269,8 @@ def grow_rrt_star(
         elif guide is not None and draw < config.goal_bias + guide_bias:
             target = guide.sample(rng)
             ahead = True
-        elif planner.informed is not None:
-            target = planner.informed.sample(rng)
         else:
-            target = uniform.sample(rng)
+            target = planner.free_sample(rng)
         new = planner.extend(target, ahead)
         if new < 0:
             continue
@@ -273,7 +283,7 @@ def grow_rrt_star(
         raise budget_used_up(tree, used_iterations=iteration >= limit, time_s=elapsed, iterations=iteration)
     result = PlanResult(
         planner.best_path,
-        path_length(planner.best_path),
+        planner.best_length,
         elapsed,
         planner.first_s,
         iteration,

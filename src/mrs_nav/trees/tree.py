@@ -109,12 +109,7 @@ class ArcTree:
         if len(targets) == 0:
             root = chain[0]
             return np.array([[*self.position[root], self.yaw[root]]])
-        poses, first = arcs.sample(arcs.connect(start_pos, start_yaw, targets), step)
-        # Each arc's first pose repeats the previous arc's last one: keep it once.
-        keep = np.ones(len(poses), dtype=bool)
-        keep[first[1:-1]] = False
-        out: FloatArray = poses[keep]
-        return out
+        return kernels.chain_poses(start_pos, start_yaw, np.ascontiguousarray(targets, dtype=np.float64), step)
 
 
 @dataclass(frozen=True, eq=False)

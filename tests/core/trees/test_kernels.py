@@ -41,6 +41,21 @@ def test_connect_one_is_the_numpy_arc() -> None:
         assert math.cos(end_yaw - batch.end_yaw[i]) == pytest.approx(1.0, abs=1e-12)
 
 
+def test_chain_poses_are_the_numpy_samples_of_each_arc_joined() -> None:
+    rng = np.random.default_rng(4)
+    for count in (1, 2, 7):
+        points = np.cumsum(rng.normal(0.0, 0.7, (count + 1, 2)), axis=0)
+        yaw = rng.uniform(-math.pi, math.pi, count)
+        chain = arcs.connect(points[:-1], yaw, points[1:])
+        poses, first = arcs.sample(chain, 0.05)
+        keep = np.ones(len(poses), dtype=bool)
+        keep[first[1:-1]] = False  # each later arc's first pose repeats the one before
+        compiled = kernels.chain_poses(points[:-1].copy(), yaw, points[1:].copy(), 0.05)
+        assert compiled.shape == (int(keep.sum()), 3)
+        np.testing.assert_allclose(compiled[:, :2], poses[keep, :2], rtol=0, atol=1e-12)
+        assert np.allclose(np.cos(compiled[:, 2] - poses[keep, 2]), 1.0, atol=1e-12)
+
+
 def test_free_arcs_have_no_point_in_a_blocked_cell_and_arcs_through_one_are_refused(cluttered: OccupancyGrid) -> None:
     batch = _random_arcs(cluttered, 1500, 2)
     free = arcs.collision_free(batch, cluttered)

@@ -111,7 +111,9 @@ def test_a_start_and_goal_next_to_the_inflated_walls_can_be_left_and_reached(are
     assert_valid_path(search.result.path, arena, start, goal, 1e-9)
 
 
-@pytest.mark.parametrize(("yaw", "nodes"), [(0.3, 2), (3.0, 3)])
+# Facing the goal nearly: one arc. Facing away: a turn of less than half a circle, then straight. Facing straight
+# away: the turn exceeds what one arc turns (twice its alpha, below pi), so it is split in two arcs, then straight.
+@pytest.mark.parametrize(("yaw", "nodes"), [(0.3, 2), (3.0, 3), (math.atan2(1.0, 15.0) - math.pi, 4)])
 def test_rrt_star_takes_a_free_arc_or_turn_then_straight_to_a_far_goal_at_once_and_only_shortens_it(
     yaw: float, nodes: int
 ) -> None:
@@ -120,7 +122,7 @@ def test_rrt_star_takes_a_free_arc_or_turn_then_straight_to_a_far_goal_at_once_a
     start, goal = Pose2D(3.0, 5.0, yaw), np.array([18.0, 6.0])
     first = grow_rrt_star(start, goal, grid, RRTStarConfig(iterations=0, time_budget=None), np.random.default_rng(0))
     assert first.result.iterations == 0
-    assert len(first.tree) == nodes  # the root, the end of the turn, the goal
+    assert len(first.tree) == nodes  # the root, the end of each piece of the turn, the goal
     assert_valid_path(first.result.path, grid, start, goal, 1e-9)
     config = RRTStarConfig(iterations=300, time_budget=None)
     search = grow_rrt_star(start, goal, grid, config, np.random.default_rng(0))
