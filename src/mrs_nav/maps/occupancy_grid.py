@@ -109,11 +109,26 @@ class OccupancyGrid:
             dx, dy = pts[:, 0] - x0, pts[:, 1] - y0
             u = (c * dx + s * dy) / self.resolution
             v = (-s * dx + c * dy) / self.resolution
-        # A point a googol away has no integer cell: clipped one cell past the border, it is simply outside.
-        col = np.floor(np.clip(u, -1.0, self.width)).astype(np.intp)
-        row = np.floor(np.clip(v, -1.0, self.height)).astype(np.intp)
+        # A point a googol away has no integer cell: clipped one cell past the border, it is simply outside
+        # (minimum and maximum rather than np.clip, whose argument checks cost more than the work on a few points).
+        col = np.floor(np.minimum(np.maximum(u, -1.0), self.width)).astype(np.intp)
+        row = np.floor(np.minimum(np.maximum(v, -1.0), self.height)).astype(np.intp)
         inside = (col.view(np.uintp) < self.width) & (row.view(np.uintp) < self.height)
         return row, col, inside
+
+    def cell(self, x: float, y: float) -> tuple[int, int] | None:
+        """``(row, col)`` of one point in metres, None outside the grid (or not finite): what :meth:`cells` gives
+        for it, in plain arithmetic (numpy's cost per call is most of a one-point lookup)."""
+        x0, y0, yaw = self.origin
+        if yaw == 0.0:
+            u, v = (x - x0) / self.resolution, (y - y0) / self.resolution
+        else:
+            c, s = math.cos(yaw), math.sin(yaw)
+            dx, dy = x - x0, y - y0
+            u, v = (c * dx + s * dy) / self.resolution, (-s * dx + c * dy) / self.resolution
+        if not (0.0 <= u < self.width and 0.0 <= v < self.height):  # NaN fails both
+            return None
+        return math.floor(v), math.floor(u)
 
     def cells_of(self, points: npt.ArrayLike) -> tuple[IntArray, IntArray, BoolArray]:
         """Rows, columns and an inside-the-grid mask of ``(N, 2)`` points (or one ``(2,)`` point) in metres.

@@ -31,10 +31,11 @@ from mrs_nav.maps.occupancy_grid import BoolArray, IntArray
 _F = nt.float64
 _I = nt.intp
 _F1 = nt.Array(_F, 1, "C")
+_F2 = nt.Array(_F, 2, "C")
 _I1 = nt.Array(_I, 1, "C")
+_B1 = nt.Array(nt.boolean, 1, "C")
 _B2 = nt.Array(nt.boolean, 2, "C")
 _FIELD = nt.Tuple((_F1, _I1))  # type: ignore[no-untyped-call]
-_HEAP = nt.Tuple((_F1, _I1, _I))  # type: ignore[no-untyped-call]
 _F32_2 = nt.Array(nt.float32, 2, "C")
 
 Float32Array = npt.NDArray[np.float32]
@@ -51,12 +52,9 @@ def _octile(r0: int, c0: int, r1: int, c1: int) -> float:
     return max(dr, dc) + (_SQRT2 - 1.0) * min(dr, dc)
 
 
-@numba.njit(_HEAP(_F1, _I1, _I, _F, _I), cache=True)
-def _push(keys: FloatArray, items: IntArray, n: int, key: float, item: int) -> tuple[FloatArray, IntArray, int]:
-    """Push onto the binary min-heap ``keys[:n]`` / ``items[:n]`` (grown by doubling); the arrays and new size."""
-    if n == len(keys):
-        keys = np.concatenate((keys, np.empty(n)))
-        items = np.concatenate((items, np.empty(n, dtype=np.intp)))
+@numba.njit(nt.void(_F1, _I1, _I, _F, _I), cache=True, inline="always")
+def _push(keys: FloatArray, items: IntArray, n: int, key: float, item: int) -> None:
+    """Push onto the binary min-heap ``keys[:n]`` / ``items[:n]``, which has room for one more."""
     i = n
     while i > 0:
         up = (i - 1) // 2
@@ -65,10 +63,9 @@ def _push(keys: FloatArray, items: IntArray, n: int, key: float, item: int) -> t
         keys[i], items[i] = keys[up], items[up]
         i = up
     keys[i], items[i] = key, item
-    return keys, items, n + 1
 
 
-@numba.njit(_I(_F1, _I1, _I), cache=True)
+@numba.njit(_I(_F1, _I1, _I), cache=True, inline="always")
 def _pop(keys: FloatArray, items: IntArray, n: int) -> int:
     """Remove the least key of the heap of size ``n`` (> 0); return its item (the heap has ``n - 1`` left)."""
     top: int = items[0]
@@ -104,26 +101,25 @@ def _lower_bound(cell: int, cols: int, start: int, sr: int, sc: int, landmarks: 
     return h
 
 
-@numba.njit(_FIELD(_B2, _I1, _I, _F32_2), cache=True)
-def goal_search(free: BoolArray, seeds: IntArray, start: int, landmarks: Float32Array) -> tuple[FloatArray, IntArray]:
-    """Distances (coarse cells) to the nearest of ``seeds`` (flat indices of free cells) and the next cell towards
-    it, over the free cells of ``free``, settled until ``start`` (flat index; -1: every reachable cell) is.
-    ``landmarks`` ``(K, cells)``: distances from K cells (inf where unreachable), which tighten the heuristic in
-    a building (K may be 0).
-
-    Returns ``(distance, towards)`` flat: ``inf`` / -1 for cells not settled; ``towards`` is -1 at the seeds.
-    """
+@numba.njit(_I(_B2, _F1, _I1, _B1, _F1, _I1, _I, _I, _F32_2), cache=True)
+def _settle(
+    free: BoolArray,
+    dist: FloatArray,
+    towards: IntArray,
+    done: BoolArray,
+    keys: FloatArray,
+    items: IntArray,
+    size: int,
+    start: int,
+    landmarks: Float32Array,
+) -> int:
+    """A* of :func:`goal_search` on its state, until ``start`` is settled or no cell is left (-1), or until the heap
+    might not hold one more cell's pushes (its size: grow it and call again)."""
     rows, cols = free.shape
-    n = rows * cols
-    dist = np.full(n, np.inf)
-    towards = np.full(n, -1, dtype=np.intp)
-    done = np.zeros(n, dtype=np.bool_)
     sr, sc = (start // cols, start % cols) if start >= 0 else (0, 0)
-    keys, items, size = np.empty(256), np.empty(256, dtype=np.intp), 0
-    for seed in seeds:
-        dist[seed] = 0.0
-        keys, items, size = _push(keys, items, size, _lower_bound(seed, cols, start, sr, sc, landmarks), seed)
     while size > 0:
+        if size + 8 > len(keys):
+            return size
         cell = _pop(keys, items, size)
         size -= 1
         if done[cell]:
@@ -145,11 +141,73 @@ def goal_search(free: BoolArray, seeds: IntArray, start: int, landmarks: Float32
                     continue
                 dist[nxt] = g
                 towards[nxt] = cell
-                h = _lower_bound(nxt, cols, start, sr, sc, landmarks)
-                keys, items, size = _push(keys, items, size, g + h, nxt)
+                _push(keys, items, size, g + _lower_bound(nxt, cols, start, sr, sc, landmarks), nxt)
+                size += 1
+    return -1
+
+
+@numba.njit(_FIELD(_B2, _I1, _I, _F32_2), cache=True)
+def goal_search(free: BoolArray, seeds: IntArray, start: int, landmarks: Float32Array) -> tuple[FloatArray, IntArray]:
+    """Distances (coarse cells) to the nearest of ``seeds`` (flat indices of free cells) and the next cell towards
+    it, over the free cells of ``free``, settled until ``start`` (flat index; -1: every reachable cell) is.
+    ``landmarks`` ``(K, cells)``: distances from K cells (inf where unreachable), which tighten the heuristic in
+    a building (K may be 0).
+
+    Returns ``(distance, towards)`` flat: ``inf`` / -1 for cells not settled; ``towards`` is -1 at the seeds.
+    """
+    n = free.size
+    dist = np.full(n, np.inf)
+    towards = np.full(n, -1, dtype=np.intp)
+    done = np.zeros(n, dtype=np.bool_)
+    keys, items, size = np.empty(256 + len(seeds)), np.empty(256 + len(seeds), dtype=np.intp), 0
+    sr, sc = (start // free.shape[1], start % free.shape[1]) if start >= 0 else (0, 0)
+    for seed in seeds:
+        dist[seed] = 0.0
+        _push(keys, items, size, _lower_bound(seed, free.shape[1], start, sr, sc, landmarks), seed)
+        size += 1
+    # The heap grows here, between calls: arrays replaced inside the search loop made it several times slower.
+    while True:
+        size = _settle(free, dist, towards, done, keys, items, size, start, landmarks)
+        if size < 0:
+            break
+        keys = np.concatenate((keys, np.empty(len(keys))))
+        items = np.concatenate((items, np.empty(len(items), dtype=np.intp)))
     dist[~done] = np.inf
     towards[~done] = -1
     return dist, towards
+
+
+@numba.njit(_F2(_I1, _I, _I, _F, _F, _F, _F, _F, _F, _F, _F, _F), cache=True)
+def corridor_points(
+    towards: IntArray,
+    cell: int,
+    cols: int,
+    size: float,
+    x0: float,
+    y0: float,
+    c: float,
+    s: float,
+    sx: float,
+    sy: float,
+    gx: float,
+    gy: float,
+) -> FloatArray:
+    """``(K, 2)``: the start ``(sx, sy)``, the centres (m) of the coarse cells after ``cell`` along ``towards`` (each
+    cell's next one, -1 at the end) but the last, and the goal ``(gx, gy)``; cells of ``size`` metres in rows of
+    ``cols``, on a grid with origin ``(x0, y0)`` and yaw of cosine ``c`` and sine ``s``."""
+    count, at = 0, cell
+    while at >= 0:
+        count += 1
+        at = towards[at]
+    out = np.empty((max(count, 2), 2))
+    out[0] = sx, sy
+    at = towards[cell]
+    for i in range(1, count - 1):
+        u, v = (at % cols + 0.5) * size, (at // cols + 0.5) * size
+        out[i] = x0 + c * u - s * v, y0 + s * u + c * v
+        at = towards[at]
+    out[-1] = gx, gy
+    return out
 
 
 @numba.njit(_F32_2(_B2, _I), cache=True)

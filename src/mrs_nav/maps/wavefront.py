@@ -26,7 +26,7 @@ from scipy.sparse.csgraph import dijkstra
 from mrs_nav.errors import NoPathFoundError
 from mrs_nav.geometry import FloatArray, format_point
 from mrs_nav.maps.occupancy_grid import BoolArray, IntArray, OccupancyGrid
-from mrs_nav.maps.route_kernels import Float32Array, goal_search, landmark_fields
+from mrs_nav.maps.route_kernels import Float32Array, corridor_points, goal_search, landmark_fields
 
 # Neighbour steps (rows, cols) and their lengths in coarse cells; the other half are the reverses.
 _STEPS = ((0, 1, 1.0), (1, 0, 1.0), (1, 1, math.sqrt(2.0)), (1, -1, math.sqrt(2.0)))
@@ -149,21 +149,32 @@ class Wavefront:
         """Positions ``(K, 2)`` from ``start`` down the distance to the goal (cell centres between the two exact
         end points); raises :class:`NoPathFoundError` when the goal cannot be reached from ``start``'s coarse cell."""
         xy = np.asarray(start, dtype=np.float64)[:2]
-        flat, inside = self.coarse_cells(xy[None, :])
-        cell = int(flat[0])
-        if not inside[0]:
+        cell = self.coarse_cell(float(xy[0]), float(xy[1]))
+        if cell < 0:
             raise NoPathFoundError(f"no path: {format_point(*xy)} lies outside the grid")
         if not math.isfinite(self.distance.reshape(-1)[cell]):
             raise NoPathFoundError(
                 f"no path: the goal {format_point(*self.goal)} cannot be reached from {format_point(*xy)}"
             )
-        chain = []
-        towards = self.towards.reshape(-1)
-        while cell >= 0:
-            chain.append(cell)
-            cell = int(towards[cell])
-        points = self.centres(np.array(chain[1:-1], dtype=np.intp))
-        return np.vstack([np.asarray(start, dtype=np.float64)[:2], points, self.goal])
+        x0, y0, yaw = self.grid.origin
+        size = self.factor * self.grid.resolution
+        return corridor_points(
+            self.towards.reshape(-1),
+            cell,
+            self.distance.shape[1],
+            size,
+            x0,
+            y0,
+            math.cos(yaw),
+            math.sin(yaw),
+            float(xy[0]),
+            float(xy[1]),
+            *self.goal,
+        )
+
+    def coarse_cell(self, x: float, y: float) -> int:
+        """Flat coarse index of one point, -1 outside the grid."""
+        return _coarse_index(self.grid, self.factor, self.distance.shape[1], x, y)
 
 
 def wavefront(grid: OccupancyGrid, goal: npt.ArrayLike, cell_m: float = 0.2, optimistic: bool = False) -> Wavefront:
@@ -194,14 +205,20 @@ def goal_field(
     landmarks = route_landmarks(grid, cell_m, optimistic)
     rows, cols = free.shape
     factor = _factor(grid, cell_m)
-    row, col, inside = grid.cells(np.asarray(start, dtype=np.float64)[:2])
-    target = int(row[0] // factor) * cols + int(col[0] // factor) if inside[0] else -1
+    start_xy = np.asarray(start, dtype=np.float64)[:2]
+    target = _coarse_index(grid, factor, cols, float(start_xy[0]), float(start_xy[1]))
     if target >= 0 and not free.reshape(-1)[target]:
         # A start cell outside the coarse free space is never reached: do not search the whole map to learn it.
         return Wavefront(grid, factor, _xy(goal), np.full((rows, cols), math.inf), np.full(rows * cols, -1))
     return _seeded(
         grid, factor, free, goal, lambda seeds: goal_search(free, np.array(seeds, dtype=np.intp), target, landmarks)
     )
+
+
+def _coarse_index(grid: OccupancyGrid, factor: int, cols: int, x: float, y: float) -> int:
+    """Flat index of the coarse cell (``factor`` grid cells, rows of ``cols``) under ``(x, y)``, -1 outside."""
+    cell = grid.cell(x, y)
+    return -1 if cell is None else (cell[0] // factor) * cols + cell[1] // factor
 
 
 def _xy(point: npt.ArrayLike) -> tuple[float, float]:
@@ -222,9 +239,8 @@ def _seeded(
     rows, cols = free.shape
     distance = np.full(rows * cols, math.inf)
     towards = np.full(rows * cols, -1, dtype=np.intp)
-    row, col, inside = grid.cells(goal_xy)
-    if inside[0]:
-        g = int(row[0] // factor) * cols + int(col[0] // factor)
+    g = _coarse_index(grid, factor, cols, float(goal_xy[0]), float(goal_xy[1]))
+    if g >= 0:
         seeds = [g] if free.reshape(-1)[g] else _free_neighbours(free, g)
         if seeds:
             dist, towards = search(seeds)

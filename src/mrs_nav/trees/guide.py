@@ -19,33 +19,28 @@ from mrs_nav.errors import NoPathFoundError
 from mrs_nav.geometry import FloatArray
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.maps.wavefront import Wavefront, goal_field
-from mrs_nav.trees import guide_kernels, kernels
 
-# Draws per guided target (the first one in free space is kept).
-_TRIES = 8
-# Guided targets whose random numbers are drawn together.
-_BLOCK = 64
+#: Draws per guided target (the first one in free space is kept).
+TRIES = 8
 
 
 class CorridorSampler:
-    """Targets along the corridor ``path`` ``(K, 2)`` of ``wave``, ahead of the frontier of the nodes reported
-    through :meth:`reached`; see the module docstring (metres). Build it with :meth:`towards`."""
+    """Targets along the corridor ``path`` ``(K, 2)`` of ``wave``, ahead of the frontier of the tree's nodes; see
+    the module docstring (metres). Build it with :meth:`towards`; the targets are drawn in compiled code
+    (:func:`mrs_nav.trees.guide_kernels.guided_target`, called by :mod:`mrs_nav.trees.search_kernels`) from the
+    random numbers of :meth:`draw`."""
 
     def __init__(self, wave: Wavefront, path: FloatArray, *, lookahead: float, spread: float) -> None:
         self.wave = wave
         self.path = path
-        self.lookahead = lookahead
         self.spread = spread
         # Metres still to go at each corridor point, decreasing from the start to 0 at the goal.
         steps = np.hypot(*np.diff(path, axis=0).T)
-        self.to_go = np.append(np.cumsum(steps[::-1])[::-1], 0.0)
-        #: The least distance to go (m) among the nodes reported so far (the corridor's start before any).
-        self.frontier = float(self.to_go[0])
-        self._grid_args = kernels.grid_args(wave.grid)
-        # Random numbers of the next guided targets (see sample); none drawn yet.
-        self._ahead = np.zeros((_BLOCK, _TRIES))
-        self._noise = np.zeros((_BLOCK, _TRIES, 2))
-        self._next = _BLOCK
+        to_go = np.append(np.cumsum(steps[::-1])[::-1], 0.0)
+        #: The least distance to go (m) among the tree's nodes so far (the corridor's start before any).
+        self.frontier = float(to_go[0])
+        #: The corridor as the compiled search takes it (:data:`mrs_nav.trees.search_kernels.GuideArgs`).
+        self.kernel_args = (lookahead, to_go, np.ascontiguousarray(path), wave.distance, wave.factor)
 
     @classmethod
     def towards(
@@ -63,26 +58,7 @@ class CorridorSampler:
             return cls(wave, path, lookahead=lookahead, spread=spread)
         return None
 
-    def reached(self, position: FloatArray) -> None:
-        """Note a new tree node: it moves the frontier when it is geodesically closer to the goal."""
-        here = guide_kernels.field_at(
-            float(position[0]), float(position[1]), self.wave.distance, self.wave.factor, self._grid_args
-        )
-        self.frontier = min(self.frontier, here)
-
-    def sample(self, rng: np.random.Generator) -> FloatArray:
-        """A target near the corridor point ``U(0, lookahead)`` metres beyond the frontier, in a free cell whose
-        neighbours are free too when one of a few draws is (a target in a wall only wastes an iteration).
-
-        The random numbers are drawn for ``_BLOCK`` targets at a time (seeded determinism is kept: the same
-        generator gives the same blocks) and each target is one compiled call."""
-        if self._next == _BLOCK:
-            self._ahead = rng.random((_BLOCK, _TRIES))
-            self._noise = rng.normal(0.0, self.spread, (_BLOCK, _TRIES, 2))
-            self._next = 0
-        i = self._next
-        self._next += 1
-        x, y = guide_kernels.guided_target(
-            self._ahead[i], self._noise[i], self.frontier, self.lookahead, self.to_go, self.path, self._grid_args
-        )
-        return np.array([x, y])
+    def draw(self, rng: np.random.Generator, count: int) -> tuple[FloatArray, FloatArray]:
+        """The random numbers of ``count`` guided targets: ``(count, TRIES)`` fractions of the lookahead and
+        ``(count, TRIES, 2)`` noise (m); each target is the first free one of its ``TRIES`` candidates."""
+        return rng.random((count, TRIES)), rng.normal(0.0, self.spread, (count, TRIES, 2))

@@ -42,15 +42,20 @@ from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.planning import PlanResult, path_length
-from mrs_nav.trees import arcs, kernels
-from mrs_nav.trees.guide import CorridorSampler
+from mrs_nav.trees import arcs, kernels, search_kernels
+from mrs_nav.trees.guide import TRIES, CorridorSampler
 from mrs_nav.trees.primitives import TURN_RADII, turn_then_straight
 from mrs_nav.trees.rrt import check_budget, check_query
 from mrs_nav.trees.samplers import InformedSampler, UniformSampler
+from mrs_nav.trees.search_kernels import GuideArgs
 from mrs_nav.trees.tree import ArcTree, Search, budget_used_up
 
-# How many nearest nodes a guided target may be steered from.
-_AHEAD_CANDIDATES = 8
+# Iterations per compiled call until the first path (the clock is read between calls).
+_BLOCK = 32
+# The guide's arguments when there is no guide (the kernel then never reads them).
+_NO_AHEAD = np.zeros((0, TRIES))
+_NO_NOISE = np.zeros((0, TRIES, 2))
+_NO_GUIDE: GuideArgs = (0.0, np.zeros(1), np.zeros((1, 2)), np.zeros((1, 1)), 1)
 
 
 @dataclass(frozen=True)
@@ -128,13 +133,44 @@ class _Planner:
         self.first_s: float | None = None
         self.history: list[tuple[int, float, float]] = []
 
-    def extend(self, target: FloatArray, ahead: bool = False) -> int:
-        """Steps 2-4 towards ``target`` (compiled: :func:`mrs_nav.trees.kernels.extend_star`); returns the new
-        node's id or -1.
+    def grow_until_path(self, rng: np.random.Generator, guide: CorridorSampler | None, count: int) -> int:
+        """Up to ``count`` iterations before the first path, in one compiled call
+        (:func:`mrs_nav.trees.search_kernels.grow_until_path`: the sample, steps 2-4, the guide's frontier and the
+        arc onto the goal); returns how many ran (fewer when a path was found)."""
+        tree, config = self.tree, self.config
+        tree.reserve(count + 1)
+        draws = rng.random(count)
+        if guide is not None:
+            ahead, noise = guide.draw(rng, count)
+            mixture = (config.goal_bias, config.guide_bias, guide.frontier)
+            guide_args = guide.kernel_args
+        else:
+            ahead, noise, mixture, guide_args = _NO_AHEAD, _NO_NOISE, (config.goal_bias, 0.0, math.inf), _NO_GUIDE
+        sampler = self.map_sampler()
+        size, ran, goal_node, used, frontier = search_kernels.grow_until_path(
+            tree.arrays,
+            tree.size,
+            self.goal[0],
+            self.goal[1],
+            draws,
+            ahead,
+            noise,
+            sampler.peek(rng, count),
+            mixture,
+            (config.step, self.gamma, self.limit, config.min_turning_radius),
+            guide_args,
+            self.grid_args,
+        )
+        sampler.advance(used)
+        tree.size = size
+        self.goal_node = goal_node
+        if guide is not None:
+            guide.frontier = frontier
+        return int(ran)
 
-        With ``ahead``, the step starts from the nearest of the few nearest nodes that faces the target (a
-        guided target lies ahead of the frontier, and a node facing away from it cannot reach it by an arc).
-        """
+    def extend(self, target: FloatArray) -> int:
+        """Steps 2-4 towards ``target`` (compiled: :func:`mrs_nav.trees.kernels.extend_star`); returns the new
+        node's id or -1."""
         tree = self.tree
         tree.reserve()
         new = kernels.extend_star(
@@ -142,26 +178,21 @@ class _Planner:
             tree.size,
             float(target[0]),
             float(target[1]),
-            ahead,
-            _AHEAD_CANDIDATES if ahead else 1,
+            False,
+            1,
             self.config.step,
             self.gamma,
             self.limit,
             self.config.min_turning_radius,
             self.grid_args,
         )
-        if new < 0:
-            return -1
-        tree.size += 1
-        x, y = tree.position[new]
-        if self.goal_node < 0 and math.hypot(x - self.goal[0], y - self.goal[1]) <= kernels.COST_EPS:
-            self.goal_node = new
+        if new >= 0:
+            tree.size += 1
         return new
 
     def try_goal(self, node: int, reach: float) -> None:
         """Connect ``node`` by one arc to the goal when it is within ``reach`` metres and the arc is feasible and
-        free (from each new node within a step: finds the first path sooner; from the root at any distance: the
-        obvious path first, at the price of one arc check)."""
+        free (from the root at any distance: the obvious path first, at the price of one arc check)."""
         tree = self.tree
         x, y = tree.position[node]
         if self.goal_node >= 0 or math.hypot(self.goal[0] - x, self.goal[1] - y) > reach:
@@ -221,9 +252,13 @@ class _Planner:
             if self.informed is None:
                 self.informed = InformedSampler(self.grid, self.start.position, self.goal, self.best_cost)
             return self.informed.sample(rng)
+        return self.map_sampler().sample(rng)
+
+    def map_sampler(self) -> UniformSampler:
+        """The sampler of free positions over the whole map (built when first needed)."""
         if self.uniform is None:
             self.uniform = UniformSampler(self.grid)
-        return self.uniform.sample(rng)
+        return self.uniform
 
 
 def grow_rrt_star(
@@ -257,26 +292,14 @@ def grow_rrt_star(
         if config.guide_bias > 0.0 and not solved
         else None
     )
-    guide_bias = config.guide_bias if guide is not None else 0.0
     while not (solved and config.stop_at_first) and iteration < limit and clock() < deadline:
-        iteration += 1
-        draw = rng.random() if planner.goal_node < 0 else 1.0
-        ahead = False
-        # While the guide is on and the tree is far from the goal, goal samples go to the guide: a step towards a
-        # goal behind walls fails, and the corridor leads there anyway.
-        if draw < config.goal_bias and not (guide is not None and guide.frontier > 2.0 * config.step):
-            target = goal.copy()
-        elif guide is not None and draw < config.goal_bias + guide_bias:
-            target = guide.sample(rng)
-            ahead = True
+        if planner.goal_node < 0:
+            # Until the first path: goal, guided and map samples, a block of iterations per compiled call.
+            iteration += planner.grow_until_path(rng, guide, int(min(_BLOCK, limit - iteration)))
         else:
-            target = planner.free_sample(rng)
-        new = planner.extend(target, ahead)
-        if new < 0:
-            continue
-        if guide is not None:
-            guide.reached(tree.position[new])
-        planner.try_goal(new, config.step)
+            iteration += 1
+            if planner.extend(planner.free_sample(rng)) < 0:
+                continue
         solved = planner.improve(iteration) or solved
     elapsed = clock() - t0
     if planner.best_path is None or planner.first_s is None:

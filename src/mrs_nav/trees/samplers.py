@@ -37,15 +37,26 @@ class _BatchSampler:
 
     def sample(self, rng: np.random.Generator) -> FloatArray:
         """One free position of the region (or anywhere free on the map if a few batches show none)."""
+        out: FloatArray = self.peek(rng, 1)[0]
+        self.advance(1)
+        return out
+
+    def peek(self, rng: np.random.Generator, count: int) -> FloatArray:
+        """The next free positions ``(k, 2)``, ``1 <= k <= count``, that :meth:`sample` would give, without taking
+        them (:meth:`advance` takes them): those left of the last batch, or of a new one; a position anywhere
+        free on the map if a few batches show none."""
         for _ in range(_BATCHES):
             if self._next < len(self._free):
-                self._next += 1
-                out: FloatArray = self._free[self._next - 1]
-                return out
+                return self._free[self._next : self._next + count]
             points = self._draw(rng)
             self._free = points[kernels.lookup(points, self._grid_args[1], self._grid_args)]
             self._next = 0
-        return sample_random_position(self.grid, rng)
+        self._free = sample_random_position(self.grid, rng)[None, :]
+        return self._free
+
+    def advance(self, count: int) -> None:
+        """Take ``count`` of the positions :meth:`peek` showed."""
+        self._next += count
 
 
 class UniformSampler(_BatchSampler):

@@ -47,11 +47,11 @@ class ArcTree:
         """The node arrays as the compiled kernels take them (the arrays themselves, not copies)."""
         return self.position, self.yaw, self.cost, self.parent, self.first_child, self.next_sibling
 
-    def reserve(self) -> None:
-        """Make room for one more node (doubling the arrays when they are full)."""
-        if self.size < len(self.yaw):
+    def reserve(self, count: int = 1) -> None:
+        """Make room for ``count`` more nodes (doubling the arrays, or more, when they are too small)."""
+        if self.size + count <= len(self.yaw):
             return
-        grow = len(self.yaw)
+        grow = max(len(self.yaw), self.size + count - len(self.yaw))
         self.position = np.concatenate([self.position, np.zeros((grow, 2))])
         self.yaw = np.concatenate([self.yaw, np.zeros(grow)])
         self.cost = np.concatenate([self.cost, np.zeros(grow)])
