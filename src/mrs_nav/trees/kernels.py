@@ -54,6 +54,9 @@ COST_EPS = 1e-9
 GridArgs = tuple[BoolArray, BoolArray, float, float, float, float, float]
 #: A tree's arrays: position (N, 2), yaw, cost, parent, first child, next sibling (-1: none).
 TreeArrays = tuple[FloatArray, FloatArray, FloatArray, IntArray, IntArray, IntArray]
+#: The numba types of :data:`GridArgs` and :data:`TreeArrays`, for the signatures of other kernel modules.
+GRID_TYPE = _GRID
+TREE_TYPE = _TREE
 
 
 def grid_args(grid: OccupancyGrid) -> GridArgs:

@@ -21,17 +21,19 @@ from numba import types as nt
 
 from mrs_nav.geometry import FloatArray
 from mrs_nav.trees.guide_kernels import field_at, guided_target
-from mrs_nav.trees.kernels import COST_EPS, GridArgs, TreeArrays, checked_arc, extend_star, link
+from mrs_nav.trees.kernels import (
+    COST_EPS,
+    GRID_TYPE,
+    TREE_TYPE,
+    GridArgs,
+    TreeArrays,
+    checked_arc,
+    extend_star,
+    link,
+)
 
-_F = nt.float64
-_I = nt.intp
-_F1 = nt.Array(_F, 1, "C")
-_F2 = nt.Array(_F, 2, "C")
-_F3 = nt.Array(_F, 3, "C")
-_I1 = nt.Array(_I, 1, "C")
-_B2 = nt.Array(nt.boolean, 2, "C")
-_GRID = nt.Tuple((_B2, _B2, _F, _F, _F, _F, _F))  # type: ignore[no-untyped-call]
-_TREE = nt.Tuple((_F2, _F1, _F1, _I1, _I1, _I1))  # type: ignore[no-untyped-call]
+_F, _I = nt.float64, nt.intp
+_F1, _F2, _F3 = (nt.Array(_F, dims, "C") for dims in (1, 2, 3))
 _MIXTURE = nt.UniTuple(_F, 3)  # type: ignore[no-untyped-call]
 _STEER = nt.UniTuple(_F, 4)  # type: ignore[no-untyped-call]
 _GUIDE = nt.Tuple((_F, _F1, _F2, _F2, _I))  # type: ignore[no-untyped-call]
@@ -45,7 +47,7 @@ AHEAD_CANDIDATES = 8
 GuideArgs = tuple[float, FloatArray, FloatArray, FloatArray, int]
 
 
-@numba.njit(_OUT(_TREE, _I, _F, _F, _F1, _F2, _F3, _F2, _MIXTURE, _STEER, _GUIDE, _GRID), cache=True)
+@numba.njit(_OUT(TREE_TYPE, _I, _F, _F, _F1, _F2, _F3, _F2, _MIXTURE, _STEER, _GUIDE, GRID_TYPE), cache=True)
 def grow_until_path(
     tree: TreeArrays,
     size: int,
