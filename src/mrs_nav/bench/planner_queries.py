@@ -18,7 +18,7 @@ import numpy as np
 
 from mrs_nav.bench.ompl_peer import OmplPlanner
 from mrs_nav.bench.planner_runs import CLOCK, attempt, clearance, fmt_ms, median, p90, ratio
-from mrs_nav.geometry import Pose2D
+from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.obstacles import Obstacles
 from mrs_nav.maps.occupancy_grid import OccupancyGrid, planning_grid
 from mrs_nav.maps.rasterize import rasterize_world
@@ -27,6 +27,7 @@ from mrs_nav.maps.world import load_world
 from mrs_nav.resources import WORLDS_DIR
 from mrs_nav.robot import BURGER_RADIUS
 from mrs_nav.tables import markdown_table
+from mrs_nav.trees.rrt import sample_random_position
 from mrs_nav.trees.rrt_star import RRTStarConfig, grow_rrt_star
 from mrs_nav.trees.scenarios import OFFICE_GOALS, OFFICE_START, building_grid
 
@@ -47,6 +48,8 @@ QUERIES: tuple[tuple[str, str, Pose2D, tuple[float, float]], ...] = (
 R2_PEERS = ("InformedRRTstar", "RRTConnect")
 DUBINS_PEERS = tuple((name, r) for r in (0.2, 0.1) for name in ("RRTstar", "InformedRRTstar", "BITstar"))
 _CAP = 2.0
+# The seed of the drawn queries (fixed, so that every run draws the same ones).
+DRAWN_SEED = 42
 
 
 def ours(grid: OccupancyGrid, start: Pose2D, goal: Any, seeds: int, obstacles: Obstacles) -> dict[str, float]:
@@ -54,15 +57,11 @@ def ours(grid: OccupancyGrid, start: Pose2D, goal: Any, seeds: int, obstacles: O
     OMPL's first paths are timed) and of the best length at 0.5 s and 2 s of a 2 s CPU budget (m, inf when the
     median run had none), runs with a path by 0.5 s, least clearance (m).
 
-    The first path is timed apart because a query timed right after a 2 s run starts with the processor's caches
-    full of that run (about 0.15 ms against 0.05 ms for the arena's one-arc path)."""
-    first, at_half, at_end, clear = [], [], [], []
+    The first path (:func:`first_paths`) is timed apart because a query timed right after a 2 s run starts with
+    the processor's caches full of that run (about 0.15 ms against 0.05 ms for the arena's one-arc path)."""
+    at_half, at_end, clear = [], [], []
     goal_xy = np.array(goal)
-    for seed in range(seeds):
-        config = RRTStarConfig(time_budget=0.5, stop_at_first=True)
-        first.append(
-            attempt(grow_rrt_star, start, goal_xy, grid, config, np.random.default_rng(seed), clock=CLOCK).first_s
-        )
+    first = first_paths(grid, start, goal_xy, seeds)
     for seed in range(seeds):
         config = RRTStarConfig(time_budget=_CAP)
         tried = attempt(grow_rrt_star, start, goal_xy, grid, config, np.random.default_rng(seed), clock=CLOCK)
@@ -80,11 +79,31 @@ def ours(grid: OccupancyGrid, start: Pose2D, goal: Any, seeds: int, obstacles: O
     }
 
 
+def first_paths(grid: OccupancyGrid, start: Pose2D, goal: Any, seeds: int) -> list[float]:
+    """Our first path (CPU s, inf when none within 0.5 s) for seeds ``0..seeds-1``, runs one after the other."""
+    config = RRTStarConfig(time_budget=0.5, stop_at_first=True)
+    goal_xy = np.asarray(goal, dtype=np.float64)
+    return [
+        attempt(grow_rrt_star, start, goal_xy, grid, config, np.random.default_rng(seed), clock=CLOCK).first_s
+        for seed in range(seeds)
+    ]
+
+
 def _ompl_first(
     grid: OccupancyGrid, start: Pose2D, goal: Any, seeds: int, *, planner: str, radius: float | None
 ) -> float:
     ompl = OmplPlanner(grid, start, goal, turning_radius=radius, planner=planner)
     return median([ompl.solve(_CAP, math.inf)[0] for _ in range(seeds)])
+
+
+def _prepared(world_file: str) -> tuple[OccupancyGrid, Obstacles]:
+    """The planning grid of a world with what is paid once per map already paid (as in the buildings' table: the
+    lookup masks and the route's landmarks), and the world's exact geometry."""
+    world = load_world(WORLDS_DIR / world_file)
+    grid = planning_grid(rasterize_world(world, 0.05))
+    _ = grid.conservative_free_mask
+    route_landmarks(grid, RRTStarConfig().guide_cell)
+    return grid, Obstacles.from_world(world)
 
 
 def query_section(seeds: int) -> str:
@@ -93,12 +112,7 @@ def query_section(seeds: int) -> str:
     loaded: dict[str, tuple[OccupancyGrid, Obstacles]] = {}
     for label, world_file, start, goal in QUERIES:
         if world_file not in loaded:
-            world = load_world(WORLDS_DIR / world_file)
-            grid = planning_grid(rasterize_world(world, 0.05))
-            # Paid once per map, as in the buildings' table: the lookup masks and the route's landmarks.
-            _ = grid.conservative_free_mask
-            route_landmarks(grid, RRTStarConfig().guide_cell)
-            loaded[world_file] = (grid, Obstacles.from_world(world))
+            loaded[world_file] = _prepared(world_file)
         grid, obstacles = loaded[world_file]
         mine = ours(grid, start, goal, seeds, obstacles)
         r2 = {name: _ompl_first(grid, start, goal, seeds, planner=name, radius=None) for name in R2_PEERS}
@@ -143,6 +157,49 @@ def query_section(seeds: int) -> str:
         f"paths' arcs (every 5 mm) to the exact world geometry, over the seeds; the robot radius {BURGER_RADIUS} m is "
         "the floor."
         f"\n\n{markdown_table(header, rows)}\n"
+    )
+
+
+def drawn_queries(grid: OccupancyGrid, count: int, seed: int) -> list[tuple[Pose2D, FloatArray]]:
+    """``count`` queries nobody chose: start and goal uniform over the free space of ``grid`` (admissible), at least a
+    third of the map's width apart, the start's heading uniform."""
+    rng = np.random.default_rng(seed)
+    apart = grid.width * grid.resolution / 3.0
+    out: list[tuple[Pose2D, FloatArray]] = []
+    while len(out) < count:
+        start, goal = sample_random_position(grid, rng), sample_random_position(grid, rng)
+        if float(np.hypot(*(goal - start))) >= apart:
+            out.append((Pose2D(float(start[0]), float(start[1]), float(rng.uniform(-math.pi, math.pi))), goal))
+    return out
+
+
+def drawn_section(seeds: int, per_world: int = 5) -> str:
+    """Markdown: our first path against OMPL's R^2 planners on queries drawn at random in each world."""
+    rows: list[list[object]] = []
+    met = 0
+    for world_file in dict.fromkeys(world for _, world, _, _ in QUERIES):
+        grid, _ = _prepared(world_file)
+        for k, (start, goal) in enumerate(drawn_queries(grid, per_world, DRAWN_SEED)):
+            mine = median(first_paths(grid, start, goal, seeds))
+            r2 = {name: _ompl_first(grid, start, goal, seeds, planner=name, radius=None) for name in R2_PEERS}
+            best = min(r2.values())
+            met += mine <= 1.5 * best
+            rows.append(
+                [
+                    f"{world_file.removesuffix('.world')} {k + 1}",
+                    f"({start.x:.2f}, {start.y:.2f}, {math.degrees(start.yaw):.0f} deg) -> "
+                    f"({goal[0]:.2f}, {goal[1]:.2f})",
+                    fmt_ms(mine),
+                    *(fmt_ms(r2[name]) for name in R2_PEERS),
+                    ratio(mine, best),
+                ]
+            )
+    header = ["query", "start -> goal", "ours [ms]", *(f"OMPL R^2 {n} [ms]" for n in R2_PEERS), "ours / best R^2"]
+    return (
+        f"### First path on drawn queries\n\n{per_world} queries per world that nobody chose (start and goal uniform "
+        f"over the free space, at least a third of the map's width apart, heading uniform; `drawn_queries`, seed "
+        f"{DRAWN_SEED}), {seeds} seeds each, CPU time, medians; first paths timed as in the table above. Ours within "
+        f"1.5x OMPL's best R^2 planner on {met} of {len(rows)}.\n\n{markdown_table(header, rows)}\n"
     )
 
 

@@ -104,7 +104,10 @@ def p90(values: list[float]) -> float:
 
 
 def fmt_ms(seconds: float) -> str:
-    return "-" if not math.isfinite(seconds) else f"{seconds * 1000:.1f}"
+    """Milliseconds with one decimal, two below 1 ms (first paths of a few tens of microseconds); '-' for none."""
+    if not math.isfinite(seconds):
+        return "-"
+    return f"{seconds * 1000:.2f}" if seconds < 1e-3 else f"{seconds * 1000:.1f}"
 
 
 def ratio(a: float, b: float) -> str:

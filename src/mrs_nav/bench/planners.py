@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from mrs_nav.bench.ompl_peer import OmplPlanner
-from mrs_nav.bench.planner_queries import building_section, query_section
+from mrs_nav.bench.planner_queries import building_section, drawn_section, query_section
 from mrs_nav.bench.planner_runs import (
     ARENA_GOAL,
     ARENA_START,
@@ -285,6 +285,7 @@ def run(args: argparse.Namespace) -> str:
         parts.append(_comparison_section(args))
     if not args.no_queries:
         parts.append(query_section(args.query_seeds))
+        parts.append(drawn_section(args.query_seeds))
     if not args.no_building:
         parts.append(building_section(args.building_seeds))
     if not args.no_scaling:

@@ -23,10 +23,11 @@ the first path) and returns the best path found; the tree's costs are monotone, 
 grows with more iterations. The path ends exactly on the goal position (a goal node).
 
 Before the first iteration the single arc from the start pose to the goal is tried (one compiled check, at any
-distance), then a few turn-then-straight pairs of arcs (:mod:`mrs_nav.trees.primitives`): a feasible and free one is
-the first path at once, and the search only shortens it. Until a
-path exists, samples are drawn from the goal, the corridor guide (:mod:`mrs_nav.trees.guide`) and the map
-(:mod:`mrs_nav.trees.samplers`); afterwards from the informed set.
+distance), then a few turn-then-straight ways (:mod:`mrs_nav.trees.primitives`: the turn in one arc, or two for a
+goal behind): a feasible and free one is the first path at once, and the search only shortens it. Until a path
+exists, samples are drawn from the goal, the corridor guide (:mod:`mrs_nav.trees.guide`) and the map
+(:mod:`mrs_nav.trees.samplers`), and the iterations run in compiled blocks (:mod:`mrs_nav.trees.search_kernels`);
+afterwards samples come from the informed set, one iteration at a time.
 """
 
 from __future__ import annotations
