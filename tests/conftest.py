@@ -12,7 +12,11 @@ from typing import Any
 import pytest
 from hypothesis import HealthCheck, settings
 
+from mrs_nav.jit import warm
 from tests.rosharness import REPO, RosMaster
+
+# Kernel caches fresh for the sources under test before any test imports a kernel (see mrs_nav.jit).
+warm()
 
 WORLDS = REPO / "worlds"
 # what rospy itself keeps registered for the test node: its log and, on sim time, the clock

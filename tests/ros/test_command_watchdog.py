@@ -137,7 +137,8 @@ def test_a_frozen_navigation_node_holds_the_lockstep_simulation_instead_of_letti
     finally:
         speeds.close()
     print(f"sim time advanced {advanced:.3f} s past the frozen node's last /cmd_vel in 3 s of wall time")
-    # one period of lockstep and one of grace (a rospy timer's tick can fall just past the horizon), plus up to a
-    # period by which this process's clock can lag the simulator's when it hears the command. Free running (the
-    # old rule) makes this many seconds.
-    assert advanced < 3.0 * PERIOD
+    # One period of lockstep and one of grace (a rospy timer's tick can fall just past the horizon): 0.20-0.21 s on a
+    # quiet machine. Plus the lag of this process's clock behind the simulator's when it hears the command, which
+    # its own /clock queue sets: 0.35 s in all in a CI run at a load of 4-5 on 2 cores. Free running (the old rule)
+    # makes this many seconds (23.6 s measured), so a bound of ten periods still tells the two apart.
+    assert advanced < 10.0 * PERIOD

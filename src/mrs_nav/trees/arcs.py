@@ -21,8 +21,10 @@ Collision checks sample every arc at arc-length steps of at most one grid resolu
 look the samples up in the grid's *conservative* free mask (free cell and free eight neighbours): every point
 between two samples is then within half a resolution of a sample and so inside a free cell of the grid. That
 costs a margin of one cell, so an arc that fails it while all its samples are in free cells is checked again
-finely: samples every resolution / 8 must be in free cells, and where two consecutive samples lie in diagonal
-cells both cells of the corner they cut must be free too (the cells a segment between them crosses). Paths may
+finely where it failed: from the sample before each failing run of samples to the sample after it, samples every
+resolution / 8 must be in free cells, and where two consecutive samples lie in diagonal cells both cells of the
+corner they cut must be free too (the cells a segment between them crosses). The rest of the arc lies within half
+a step of a sample whose cell and neighbours are free, so in free cells. Paths may
 then pass as close to the inflated obstacles as the grid allows, and a start or goal next to them can be left or
 reached.
 """

@@ -145,11 +145,33 @@ def chain_poses(start: FloatArray, yaw: FloatArray, target: FloatArray, step: fl
     return out
 
 
+@numba.njit(_B(_F, _F, _F, _F, _F, _F, _GRID), cache=True)
+def _span_free(x1: float, y1: float, yaw: float, curvature: float, s0: float, s1: float, grid: GridArgs) -> bool:
+    """The fine check of :func:`arc_free` on the arc's stretch from arc length ``s0`` to ``s1``: samples every
+    resolution / 8 or less in ``free``, and the corners they cut."""
+    _, free, x0, y0, c, s, res = grid
+    n = _segments(s1 - s0, res / 8.0)
+    prev_row, prev_col = -1, -1
+    for k in range(n + 1):
+        px, py = _point(x1, y1, yaw, curvature, s0 + (s1 - s0) * (k / n))
+        row, col = _cell(px, py, x0, y0, c, s, res)
+        if not _at(free, row, col):
+            return False
+        # Diagonal neighbours: the segment between the samples crosses one of the corner's other two cells.
+        corner = k > 0 and row != prev_row and col != prev_col
+        if corner and not (_at(free, prev_row, col) and _at(free, row, prev_col)):
+            return False
+        prev_row, prev_col = row, col
+    return True
+
+
 @numba.njit(_B(_F, _F, _F, _F, _F, _GRID), cache=True)
 def arc_free(x1: float, y1: float, yaw: float, curvature: float, length: float, grid: GridArgs) -> bool:
-    """True when every point of the arc lies in a free cell: samples every resolution or less in ``cons``; failing
-    that, with every such sample in ``free``, samples every resolution / 8 in ``free`` and the corners they cut
-    (the check of :func:`mrs_nav.trees.arcs.collision_free`)."""
+    """True when every point of the arc lies in a free cell: samples every resolution or less in ``cons``; where
+    one is not (but is in ``free``), the stretch from the sample before it to the sample after it is checked
+    finely (:func:`_span_free`). Each point of the arc lies within half a step of a sample, so in that sample's
+    cell or a neighbour: free around a sample in ``cons``, and checked finely around any other (the check of
+    :func:`mrs_nav.trees.arcs.collision_free`)."""
     cons, free, x0, y0, c, s, res = grid
     n = _segments(length, res)
     plain = True
@@ -162,18 +184,25 @@ def arc_free(x1: float, y1: float, yaw: float, curvature: float, length: float, 
                 return False
     if plain:
         return True
-    n = _segments(length, res / 8.0)
-    prev_row, prev_col = -1, -1
-    for k in range(n + 1):
+    # Runs of samples outside ``cons``, each widened by one sample on both sides, are checked finely.
+    k = 0
+    while k <= n:
         px, py = _point(x1, y1, yaw, curvature, length * (k / n))
         row, col = _cell(px, py, x0, y0, c, s, res)
-        if not _at(free, row, col):
+        if _at(cons, row, col):
+            k += 1
+            continue
+        last = k
+        while last < n:
+            px, py = _point(x1, y1, yaw, curvature, length * ((last + 1) / n))
+            row, col = _cell(px, py, x0, y0, c, s, res)
+            if _at(cons, row, col):
+                break
+            last += 1
+        begin, end = max(k - 1, 0), min(last + 1, n)
+        if not _span_free(x1, y1, yaw, curvature, length * (begin / n), length * (end / n), grid):
             return False
-        # Diagonal neighbours: the segment between the samples crosses one of the corner's other two cells.
-        corner = k > 0 and row != prev_row and col != prev_col
-        if corner and not (_at(free, prev_row, col) and _at(free, row, prev_col)):
-            return False
-        prev_row, prev_col = row, col
+        k = last + 1
     return True
 
 
