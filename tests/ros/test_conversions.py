@@ -102,3 +102,28 @@ def test_a_goal_message_is_converted_once_into_a_finite_goal_with_or_without_a_h
     msg.pose.position.x = math.nan
     with pytest.raises(InvalidInputError, match="its position is not a finite number"):
         nav.goal_in_frame(buffer, msg, "map")
+
+
+# Debian's generated nav_msgs code serialises the array with numpy's deprecated tostring(): its warning, not ours.
+@pytest.mark.filterwarnings("ignore:tostring:DeprecationWarning")
+def test_a_map_goes_out_as_one_int8_array_with_the_bytes_of_the_plain_message() -> None:
+    import io
+
+    import rospy
+    from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
+    from nav_msgs.srv import GetMapResponse
+
+    from mrs_nav.maps.occupancy_grid import OccupancyGrid
+    from mrs_nav.ros.map_messages import occupancy_grid_msg
+
+    values = np.array([[-1, 0, 100], [50, 0, -1]], dtype=np.int8)
+    msg = occupancy_grid_msg(OccupancyGrid(values, 0.05, (1.0, -2.0, 0.5)), rospy.Time(3, 4), "map")
+    assert isinstance(msg.data, np.ndarray)
+    assert msg.data.dtype == np.int8
+    plain = OccupancyGridMsg()
+    plain.header, plain.info, plain.data = msg.header, msg.info, values.ravel().tolist()
+    for wrap in (lambda m: m, lambda m: GetMapResponse(map=m)):  # the topic, and the map services' response
+        ours, theirs = io.BytesIO(), io.BytesIO()
+        wrap(msg).serialize(ours)
+        wrap(plain).serialize(theirs)
+        assert ours.getvalue() == theirs.getvalue()

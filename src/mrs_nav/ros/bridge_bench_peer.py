@@ -16,11 +16,13 @@ import threading
 import time
 from typing import Any
 
+import numpy as np
 import rospy
-from nav_msgs.msg import OccupancyGrid, Odometry
+from nav_msgs.msg import Odometry
 from sensor_msgs.msg import LaserScan
 
 from mrs_nav.atomic_write import write_text
+from mrs_nav.ros.map_messages import OccupancyGridArrayMsg
 
 WARMUP = 1.0  # s published before measuring, so every connection is established
 
@@ -33,12 +35,12 @@ def make_messages(namespace: str = "") -> dict[str, tuple[Any, Any, float]]:
     scan.range_min, scan.range_max = 0.12, 3.5
     scan.ranges = [1.0] * 360
     scan.intensities = [0.0] * 360
-    grid = OccupancyGrid()
+    grid = OccupancyGridArrayMsg()  # published as SLAM and the map server publish theirs (map_messages)
     grid.header.frame_id = "map"
     grid.info.width = grid.info.height = 384
     grid.info.resolution = 0.05
     grid.info.origin.orientation.w = 1.0
-    grid.data = [-1] * (384 * 384)
+    grid.data = np.full(384 * 384, -1, dtype=np.int8)
     odom = Odometry()
     odom.header.frame_id, odom.child_frame_id = "odom", "base_footprint"
     odom.pose.pose.orientation.w = 1.0
@@ -46,7 +48,7 @@ def make_messages(namespace: str = "") -> dict[str, tuple[Any, Any, float]]:
     return {
         f"{ns}/odom": (Odometry, odom, 100.0),
         f"{ns}/scan": (LaserScan, scan, 5.0),
-        f"{ns}/map": (OccupancyGrid, grid, 1.0),
+        f"{ns}/map": (OccupancyGridArrayMsg, grid, 1.0),
     }
 
 

@@ -24,7 +24,7 @@ from mrs_nav.maps.map_io import load_map, map_targets, save_map
 from mrs_nav.maps.map_world import disagreement, world_path
 from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.options import Parser, integer_option
-from mrs_nav.ros.map_messages import occupancy_grid_msg
+from mrs_nav.ros.map_messages import OccupancyGridArrayMsg, occupancy_grid_msg
 from mrs_nav.ros.navigation_conversions import grid_from_msg
 from mrs_nav.ros.params import private_params
 
@@ -38,7 +38,7 @@ class MapServerNode:
 
     def __init__(self, grid: OccupancyGrid, frame_id: str) -> None:
         self._msg = occupancy_grid_msg(grid, rospy.Time.now(), frame_id)
-        self._map_pub = rospy.Publisher("map", OccupancyGridMsg, queue_size=1, latch=True)
+        self._map_pub = rospy.Publisher("map", OccupancyGridArrayMsg, queue_size=1, latch=True)
         self._meta_pub = rospy.Publisher("map_metadata", MapMetaData, queue_size=1, latch=True)
         self._map_pub.publish(self._msg)
         self._meta_pub.publish(self._msg.info)

@@ -81,19 +81,6 @@ def latest_pose(buffer: tf2_ros.Buffer, frame: str, child: str, timeout_s: float
     return pose_from_transform(transform)
 
 
-def grid_msg(grid: OccupancyGrid, stamp: rospy.Time, frame: str) -> OccupancyGridMsg:
-    """A ``nav_msgs/OccupancyGrid`` of ``grid`` (values as they are: -1 unknown, 0..100)."""
-    msg = OccupancyGridMsg()
-    msg.header.stamp = stamp
-    msg.header.frame_id = frame
-    msg.info.map_load_time = stamp
-    msg.info.resolution = grid.resolution
-    msg.info.width, msg.info.height = grid.width, grid.height
-    msg.info.origin = pose_msg(Pose2D(*grid.origin))
-    msg.data = grid.values.ravel().tolist()
-    return msg
-
-
 def goal_in_frame(buffer: tf2_ros.Buffer, msg: PoseStamped, frame: str) -> NavGoal:
     """The goal ``msg`` asks for, in ``frame`` (an empty header frame means ``frame``): its position and heading,
     None when the orientation is the all-zero quaternion (no rotation: a goal sent without one).

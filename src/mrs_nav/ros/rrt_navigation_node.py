@@ -60,7 +60,6 @@ from move_base_msgs.msg import MoveBaseAction, MoveBaseActionGoal, MoveBaseFeedb
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Path
 from nav_msgs.srv import GetPlan, GetPlanRequest, GetPlanResponse
-from rospy.numpy_msg import numpy_msg
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 from std_srvs.srv import Empty, EmptyRequest, EmptyResponse
@@ -84,11 +83,11 @@ from mrs_nav.navigation.quiet import QuietWatch
 from mrs_nav.ros.action_server import RepeatedIdActionServer
 from mrs_nav.ros.clock_jump import TimeJumpGuard, keep_status_timer
 from mrs_nav.ros.conversions import covariance_3x3, pose_from_msg, pose_msg
+from mrs_nav.ros.map_messages import OccupancyGridArrayMsg, occupancy_grid_msg
 from mrs_nav.ros.map_odom import lookup_pose
 from mrs_nav.ros.navigation_conversions import (
     goal_in_frame,
     grid_from_msg,
-    grid_msg,
     latest_pose,
     path_msg,
     pose_in_frame,
@@ -133,7 +132,7 @@ class RrtNavigationNode:
         self._cmd_pub = rospy.Publisher("cmd_vel", Twist, queue_size=1, tcp_nodelay=True)
         self._path_pub = rospy.Publisher("path", Path, queue_size=1, latch=True)
         self._costmap_pub = rospy.Publisher(
-            "move_base/global_costmap/costmap", OccupancyGridMsg, queue_size=1, latch=True
+            "move_base/global_costmap/costmap", OccupancyGridArrayMsg, queue_size=1, latch=True
         )
         self._status_pub = rospy.Publisher("~status", String, queue_size=10, latch=True)
         self._action_goal_pub = rospy.Publisher("move_base/goal", MoveBaseActionGoal, queue_size=1)
@@ -166,7 +165,7 @@ class RrtNavigationNode:
         self._subs = [
             # numpy_msg: the cells arrive as one int8 array (plain genpy unpacks a tuple of ints, then numpy
             # copies it: most of what a SLAM map update cost this node)
-            rospy.Subscriber("map", numpy_msg(OccupancyGridMsg), self._on_map, queue_size=1),
+            rospy.Subscriber("map", OccupancyGridArrayMsg, self._on_map, queue_size=1),
             rospy.Subscriber("scan", LaserScan, self._on_scan, queue_size=1),
             rospy.Subscriber("move_base_simple/goal", PoseStamped, self._on_simple_goal, queue_size=1),
             rospy.Subscriber("amcl_pose", PoseWithCovarianceStamped, self._on_localisation, queue_size=10),
@@ -487,7 +486,8 @@ class RrtNavigationNode:
         if path is not None:
             publish_unless_shutdown(self._path_pub, path_msg(path, now, self.config.map_frame), "rrt_navigation")
         if costmap is not None:
-            publish_unless_shutdown(self._costmap_pub, grid_msg(costmap, now, self.config.map_frame), "rrt_navigation")
+            costmap_msg = occupancy_grid_msg(costmap, now, self.config.map_frame)
+            publish_unless_shutdown(self._costmap_pub, costmap_msg, "rrt_navigation")
         self._report(events)
         self._warn_lasting(blind, lasting)
         self._ask_for_update(now.to_sec(), confirming)

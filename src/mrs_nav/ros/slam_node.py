@@ -29,7 +29,8 @@ from typing import Any
 
 import rospy
 import tf2_ros
-from nav_msgs.msg import MapMetaData, OccupancyGrid
+from nav_msgs.msg import MapMetaData
+from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.srv import GetMap, GetMapRequest, GetMapResponse
 from sensor_msgs.msg import LaserScan
 from std_srvs.srv import Empty, EmptyRequest, EmptyResponse
@@ -37,8 +38,10 @@ from std_srvs.srv import Empty, EmptyRequest, EmptyResponse
 from mrs_nav.config_files import node_default
 from mrs_nav.errors import MrsNavError
 from mrs_nav.geometry import Pose2D
+from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.ros.clock_jump import TimeJumpGuard
-from mrs_nav.ros.conversions import any_reading, pose_msg, scan_data
+from mrs_nav.ros.conversions import any_reading, scan_data
+from mrs_nav.ros.map_messages import OccupancyGridArrayMsg, occupancy_grid_msg
 from mrs_nav.ros.map_odom import MapOdomBroadcaster, check_timing, lookup_pose, tf_state
 from mrs_nav.ros.navigation_conversions import publish_unless_shutdown
 from mrs_nav.ros.params import private_params
@@ -96,7 +99,7 @@ class SlamNode:
         self._listener = tf2_ros.TransformListener(self._buffer)
         # dated one period ahead, as gmapping does, so lookups at the newest odometry stamp find it
         self._map_odom = MapOdomBroadcaster(config.map_frame, config.odom_frame, config.transform_publish_period)
-        self._map_pub = rospy.Publisher("map", OccupancyGrid, queue_size=1, latch=True)
+        self._map_pub = rospy.Publisher("map", OccupancyGridArrayMsg, queue_size=1, latch=True)
         self._meta_pub = rospy.Publisher("map_metadata", MapMetaData, queue_size=1, latch=True)
         self._scan_sub = rospy.Subscriber("scan", LaserScan, self._on_scan, queue_size=5)
         self._time_jump = TimeJumpGuard("slam", self._on_time_jump, self._buffer)
@@ -182,24 +185,16 @@ class SlamNode:
         if correction is not None:
             self._map_odom.send(correction)
 
-    def _map_message(self, stamp: rospy.Time) -> OccupancyGrid | None:
+    def _map_message(self, stamp: rospy.Time) -> OccupancyGridMsg | None:
         """The map as it is now, stamped ``stamp``; None before the first processed scan."""
         with self._lock:
             if self._slam is None:
                 return None
             grid = self._slam.grid
-            data = grid.to_occupancy()
-            info = MapMetaData()
-            info.map_load_time = stamp
-            info.resolution = grid.resolution
-            info.width, info.height = grid.width, grid.height
-            info.origin = pose_msg(Pose2D(grid.origin_x, grid.origin_y, 0.0))
-        msg = OccupancyGrid()
-        msg.header.stamp = stamp
-        msg.header.frame_id = self.config.map_frame
-        msg.info = info
-        msg.data = data.ravel().tolist()
-        return msg
+            values = grid.to_occupancy().reshape(grid.height, grid.width)
+            origin = (grid.origin_x, grid.origin_y, 0.0)
+            resolution = grid.resolution
+        return occupancy_grid_msg(OccupancyGrid(values, resolution, origin), stamp, self.config.map_frame)
 
     def _publish_map(self, stamp: rospy.Time) -> None:
         msg = self._map_message(stamp)
