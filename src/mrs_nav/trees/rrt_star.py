@@ -45,6 +45,7 @@ from mrs_nav.maps.occupancy_grid import OccupancyGrid
 from mrs_nav.planning import PlanResult, path_length
 from mrs_nav.trees import arcs, kernels, search_kernels
 from mrs_nav.trees.guide import TRIES, CorridorSampler
+from mrs_nav.trees.guide_kernels import field_at
 from mrs_nav.trees.primitives import TURN_RADII, turn_then_straight
 from mrs_nav.trees.rrt import check_budget, check_query
 from mrs_nav.trees.samplers import InformedSampler, UniformSampler
@@ -228,6 +229,21 @@ class _Planner:
         if len(way):
             self.goal_node = node
 
+    def turn_onto(self, guide: CorridorSampler) -> None:
+        """Seed the tree with the shortest free turn-then-straight way from the start pose to the corridor point a
+        step along it, when there is one: guided targets lie ahead along the corridor, and a start facing away
+        from it would otherwise wait for the few map samples that turn the tree round."""
+        _, to_go, path, distance, factor = guide.kernel_args
+        k = min(int(np.searchsorted(-to_go, -(to_go[0] - self.config.step))), len(path) - 1)
+        start, mtr = self.start, self.config.min_turning_radius
+        way = turn_then_straight(
+            start.x, start.y, start.yaw, path[k, 0], path[k, 1], TURN_RADII, self.limit, mtr, self.grid_args
+        )
+        node = 0
+        for x, y, yaw, length in way:
+            node = self.tree.add((x, y), yaw, node, float(self.tree.cost[node] + length))
+            guide.frontier = min(guide.frontier, field_at(x, y, distance, factor, self.grid_args))
+
     def improve(self, iteration: int) -> bool:
         """Keep the path to the goal node when it is shorter than the best so far (and start sampling the new
         informed set); True when the goal node's cost went down."""
@@ -293,6 +309,8 @@ def grow_rrt_star(
         if config.guide_bias > 0.0 and not solved
         else None
     )
+    if guide is not None:
+        planner.turn_onto(guide)
     while not (solved and config.stop_at_first) and iteration < limit and clock() < deadline:
         if planner.goal_node < 0:
             # Until the first path: goal, guided and map samples, a block of iterations per compiled call.

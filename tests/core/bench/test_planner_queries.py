@@ -19,6 +19,7 @@ def test_drawn_queries_are_admissible_apart_and_repeatable() -> None:
     for start, goal in queries:
         check_query(grid, start, goal)  # raises when the start or goal is not admissible
         assert np.hypot(*(goal - start.position)) >= grid.width * grid.resolution / 3.0
+        assert grid.lookup(grid.conservative_free_mask, np.array([start.position, goal])).all()
     again = drawn_queries(grid, 8, 7)
     assert all(a[0] == b[0] and np.array_equal(a[1], b[1]) for a, b in zip(queries, again, strict=True))
     assert len({(s.x, s.y) for s, _ in queries}) == 8

@@ -63,3 +63,28 @@ def test_rrt_star_still_never_lengthens_its_best_path_with_the_guide(office: Occ
         assert search.result.length_m == lengths[-1]
         improved += len(lengths) - 1
     assert improved >= 2  # the guide only seeds the first path; RRT* keeps shortening it
+
+
+def test_a_start_facing_away_from_the_corridor_is_turned_onto_it_before_sampling() -> None:
+    from mrs_nav.geometry import Pose2D
+    from mrs_nav.maps.rasterize import rasterize_world
+    from mrs_nav.maps.world import load_world
+    from mrs_nav.resources import WORLDS_DIR
+    from mrs_nav.trees.tree import NoPathInTreeError
+
+    grid = planning_grid(rasterize_world(load_world(WORLDS_DIR / "cluttered.world"), 0.05))
+    start, goal = Pose2D(-4.07, -4.46, 3.05), np.array([-0.2, -1.77])  # facing west, the way runs east
+    config = RRTStarConfig(iterations=0, time_budget=None, stop_at_first=True)
+    with pytest.raises(NoPathInTreeError) as failed:
+        grow_rrt_star(start, goal, grid, config, np.random.default_rng(0))
+    tree = failed.value.tree
+    assert len(tree) >= 3  # the root, the turn, the straight onto the corridor
+    edges = tree.edges()
+    assert arcs.checked(edges, grid).all()
+    last = len(tree) - 1
+    heading = np.array([np.cos(tree.yaw[last]), np.sin(tree.yaw[last])])
+    assert float(heading @ (goal - tree.position[last])) > 0.0  # now facing the goal's side
+    found = grow_rrt_star(
+        start, goal, grid, RRTStarConfig(iterations=60, time_budget=None, stop_at_first=True), np.random.default_rng(0)
+    )
+    assert _valid(found.result.path, grid)
