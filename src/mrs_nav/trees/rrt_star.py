@@ -223,11 +223,8 @@ class _Planner:
         way = turn_then_straight(
             start.x, start.y, start.yaw, self.goal[0], self.goal[1], TURN_RADII, self.limit, mtr, self.grid_args
         )
-        node = 0
-        for x, y, yaw, length in way:
-            node = self.tree.add((x, y), yaw, node, float(self.tree.cost[node] + length))
         if len(way):
-            self.goal_node = node
+            self.goal_node = self._add_way(way)[-1]
 
     def turn_onto(self, guide: CorridorSampler) -> None:
         """Seed the tree with the shortest free turn-then-straight way from the start pose to the corridor point a
@@ -239,10 +236,17 @@ class _Planner:
         way = turn_then_straight(
             start.x, start.y, start.yaw, path[k, 0], path[k, 1], TURN_RADII, self.limit, mtr, self.grid_args
         )
-        node = 0
+        for node in self._add_way(way):
+            x, y = self.tree.position[node]
+            guide.frontier = min(guide.frontier, field_at(x, y, distance, factor, self.grid_args))
+
+    def _add_way(self, way: FloatArray) -> list[int]:
+        """Add the chain of arcs ``way`` (rows ``(x, y, end yaw, length)``, from the root) to the tree; its nodes."""
+        nodes, node = [], 0
         for x, y, yaw, length in way:
             node = self.tree.add((x, y), yaw, node, float(self.tree.cost[node] + length))
-            guide.frontier = min(guide.frontier, field_at(x, y, distance, factor, self.grid_args))
+            nodes.append(node)
+        return nodes
 
     def improve(self, iteration: int) -> bool:
         """Keep the path to the goal node when it is shorter than the best so far (and start sampling the new
