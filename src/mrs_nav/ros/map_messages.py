@@ -38,5 +38,6 @@ def occupancy_grid_msg(grid: OccupancyGrid, stamp: rospy.Time, frame_id: str) ->
     msg.header.stamp = stamp
     msg.header.frame_id = frame_id
     msg.info = map_metadata(grid, stamp)
-    msg.data = np.ascontiguousarray(grid.values, dtype=np.int8).ravel()
+    # A copy: a latched publisher keeps the message and serialises it again for each later subscriber.
+    msg.data = np.array(grid.values, dtype=np.int8).ravel()
     return msg
