@@ -23,7 +23,8 @@ def path_length(path: npt.ArrayLike) -> float:
     points = np.asarray(path, dtype=np.float64)
     if points.ndim != 2 or points.shape[0] < 2:
         return 0.0
-    return float(np.sum(np.hypot(*np.diff(points[:, :2], axis=0).T)))
+    x, y = points[:, 0], points[:, 1]
+    return float(np.hypot(x[1:] - x[:-1], y[1:] - y[:-1]).sum())
 
 
 def headings_along(points: npt.ArrayLike, final_yaw: float | None = None) -> FloatArray:

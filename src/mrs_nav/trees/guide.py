@@ -35,8 +35,9 @@ class CorridorSampler:
         self.path = path
         self.spread = spread
         # Metres still to go at each corridor point, decreasing from the start to 0 at the goal.
-        steps = np.hypot(*np.diff(path, axis=0).T)
-        to_go = np.append(np.cumsum(steps[::-1])[::-1], 0.0)
+        x, y = path[:, 0], path[:, 1]
+        to_go = np.zeros(len(path))
+        to_go[-2::-1] = np.cumsum(np.hypot(x[-1:0:-1] - x[-2::-1], y[-1:0:-1] - y[-2::-1]))
         #: The least distance to go (m) among the tree's nodes so far (the corridor's start before any).
         self.frontier = float(to_go[0])
         #: The corridor as the compiled search takes it (:data:`mrs_nav.trees.search_kernels.GuideArgs`).

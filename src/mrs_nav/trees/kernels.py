@@ -425,6 +425,20 @@ def link(tree: TreeArrays, node: int, parent: int) -> None:
     first_child[parent] = node
 
 
+@numba.njit(_I(_TREE, _I, _I, _F2), cache=True)
+def add_chain(tree: TreeArrays, size: int, parent: int, way: FloatArray) -> int:
+    """Append the chain of arcs ``way`` (rows ``(x, y, end yaw, length)``) below ``parent`` as nodes ``size``,
+    ``size + 1``, ...; returns the new size (the arrays must have room)."""
+    position, yaw, cost = tree[0], tree[1], tree[2]
+    for row in range(len(way)):
+        position[size, 0], position[size, 1], yaw[size] = way[row, 0], way[row, 1], way[row, 2]
+        cost[size] = cost[parent] + way[row, 3]
+        link(tree, size, parent)
+        parent = size
+        size += 1
+    return size
+
+
 @numba.njit(nt.void(_TREE, _I), cache=True)
 def _unlink(tree: TreeArrays, node: int) -> None:
     """Take ``node`` out of its parent's children."""

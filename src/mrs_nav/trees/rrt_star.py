@@ -24,8 +24,10 @@ grows with more iterations. The path ends exactly on the goal position (a goal n
 
 Before the first iteration the single arc from the start pose to the goal is tried (one compiled check, at any
 distance), then a few turn-then-straight ways (:mod:`mrs_nav.trees.primitives`: the turn in one arc, or two for a
-goal behind): a feasible and free one is the first path at once, and the search only shortens it. Until a path
-exists, samples are drawn from the goal, the corridor guide (:mod:`mrs_nav.trees.guide`) and the map
+goal behind): a feasible and free one is the first path at once, and the search only shortens it. Else the
+corridor of the guide (:mod:`mrs_nav.trees.guide`) is followed from corner to corner by such ways
+(:func:`mrs_nav.trees.primitives.follow_corridor`): the first path when they reach the goal, else the tree's
+first branch. Until a path exists, samples are drawn from the goal, the corridor guide and the map
 (:mod:`mrs_nav.trees.samplers`), and the iterations run in compiled blocks (:mod:`mrs_nav.trees.search_kernels`);
 afterwards samples come from the informed set, one iteration at a time.
 """
@@ -46,7 +48,7 @@ from mrs_nav.planning import PlanResult, path_length
 from mrs_nav.trees import arcs, kernels, search_kernels
 from mrs_nav.trees.guide import TRIES, CorridorSampler
 from mrs_nav.trees.guide_kernels import field_at
-from mrs_nav.trees.primitives import TURN_RADII, turn_then_straight
+from mrs_nav.trees.primitives import TURN_RADII, follow_corridor, turn_then_straight
 from mrs_nav.trees.rrt import check_budget, check_query
 from mrs_nav.trees.samplers import InformedSampler, UniformSampler
 from mrs_nav.trees.search_kernels import GuideArgs
@@ -224,29 +226,24 @@ class _Planner:
             start.x, start.y, start.yaw, self.goal[0], self.goal[1], TURN_RADII, self.limit, mtr, self.grid_args
         )
         if len(way):
-            self.goal_node = self._add_way(way)[-1]
+            self.goal_node = self.tree.add_chain(way)[-1]
 
-    def turn_onto(self, guide: CorridorSampler) -> None:
-        """Seed the tree with the shortest free turn-then-straight way from the start pose to the corridor point a
-        step along it, when there is one: guided targets lie ahead along the corridor, and a start facing away
-        from it would otherwise wait for the few map samples that turn the tree round."""
-        _, to_go, path, distance, factor = guide.kernel_args
-        k = min(int(np.searchsorted(-to_go, -(to_go[0] - self.config.step))), len(path) - 1)
-        start, mtr = self.start, self.config.min_turning_radius
-        way = turn_then_straight(
-            start.x, start.y, start.yaw, path[k, 0], path[k, 1], TURN_RADII, self.limit, mtr, self.grid_args
+    def follow(self, guide: CorridorSampler) -> None:
+        """Seed the tree with turn-then-straight ways from corner to corner of the corridor
+        (:func:`mrs_nav.trees.primitives.follow_corridor`): the first path when they reach the goal, else as far
+        as they go, with the guide's frontier moved there (guided targets lie ahead of it, and a start facing away
+        from the corridor would otherwise wait for the few map samples that turn the tree round)."""
+        start, (_, _, path, distance, factor) = self.start, guide.kernel_args
+        way = follow_corridor(
+            start.x, start.y, start.yaw, path, TURN_RADII, self.limit, self.config.min_turning_radius, self.grid_args
         )
-        for node in self._add_way(way):
+        nodes = self.tree.add_chain(way)
+        if nodes and math.hypot(*(self.goal - way[-1, :2])) <= kernels.COST_EPS:
+            self.goal_node = nodes[-1]
+            return
+        for node in nodes:
             x, y = self.tree.position[node]
             guide.frontier = min(guide.frontier, field_at(x, y, distance, factor, self.grid_args))
-
-    def _add_way(self, way: FloatArray) -> list[int]:
-        """Add the chain of arcs ``way`` (rows ``(x, y, end yaw, length)``, from the root) to the tree; its nodes."""
-        nodes, node = [], 0
-        for x, y, yaw, length in way:
-            node = self.tree.add((x, y), yaw, node, float(self.tree.cost[node] + length))
-            nodes.append(node)
-        return nodes
 
     def improve(self, iteration: int) -> bool:
         """Keep the path to the goal node when it is shorter than the best so far (and start sampling the new
@@ -314,7 +311,8 @@ def grow_rrt_star(
         else None
     )
     if guide is not None:
-        planner.turn_onto(guide)
+        planner.follow(guide)
+        solved = planner.improve(iteration)
     while not (solved and config.stop_at_first) and iteration < limit and clock() < deadline:
         if planner.goal_node < 0:
             # Until the first path: goal, guided and map samples, a block of iterations per compiled call.

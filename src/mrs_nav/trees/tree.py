@@ -71,6 +71,13 @@ class ArcTree:
         self.size += 1
         return i
 
+    def add_chain(self, way: FloatArray, parent: int = 0) -> range:
+        """Append the chain of arcs ``way`` (rows ``(x, y, end yaw, length)``) below ``parent``; the new ids."""
+        self.reserve(len(way))
+        first = self.size
+        self.size = kernels.add_chain(self.arrays, first, parent, np.ascontiguousarray(way))
+        return range(first, self.size)
+
     def nearest(self, point: FloatArray, k: int = 1) -> tuple[IntArray, FloatArray]:
         """Ids and distances of the ``k`` nodes nearest to ``point`` (fewer when the tree is smaller), nearest first."""
         return kernels.nearest_k(self.position, self.size, float(point[0]), float(point[1]), k)

@@ -5,9 +5,12 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from mrs_nav.cli.main import main
+from mrs_nav.maps.map_io import save_map
+from mrs_nav.maps.occupancy_grid import OCCUPIED, OccupancyGrid
 
 REPO = Path(__file__).resolve().parents[3]
 MAP = str(REPO / "maps" / "simple.yaml")
@@ -56,19 +59,23 @@ def test_no_path_within_budget_exits_2_and_still_draws_the_tree(
     capsys: pytest.CaptureFixture[str], tmp_path: Path
 ) -> None:
     png = tmp_path / "tree.png"
+    values = np.zeros((60, 60), dtype=np.int8)
+    values[40:50, 40] = values[40:50, 50] = values[40, 40:51] = values[50, 40:51] = OCCUPIED  # a closed box
+    boxed = tmp_path / "boxed.yaml"
+    save_map(OccupancyGrid(values, 0.05, (0.0, 0.0, 0.0)), boxed)
     code = main(
         [
             "plan",
             "--map",
-            MAP,
+            str(boxed),
             "--planner",
             "rrt_star",
             "--start",
-            "-1.5,-1.5,3.14",  # facing away from the goal: no single arc reaches it, one iteration cannot
+            "0.5,0.5,3.14",
             "--goal",
-            "1.5,1.5",
+            "2.25,2.25",  # inside the box
             "--iterations",
-            "1",
+            "5",
             "--png",
             str(png),
         ]
