@@ -44,7 +44,7 @@ class RosSoak:
     sim_s: float
 
 
-def _planner_overrides(path: Path, iterations: int) -> Path:
+def planner_overrides(path: Path, iterations: int) -> Path:
     """A launch file setting the navigation node's plan to ``iterations`` iterations (given to roslaunch after
     the main one, whose parameters it overrides)."""
     path.write_text(
@@ -78,7 +78,7 @@ def ros_soak(minutes: float, jump_every: float, seed: int, iterations: int) -> R
                 "rrt_navigation.launch",
                 WORLDS_DIR / "simple.world",
                 START,
-                str(_planner_overrides(log_dir / "plan.launch", iterations)),
+                str(planner_overrides(log_dir / "plan.launch", iterations)),
                 "real_time_factor:=0",
                 "lockstep:=true",
                 "rviz:=false",
