@@ -243,9 +243,19 @@ def test_the_monitor_from_a_wheel_in_a_fresh_venv(ros_master: RosMaster, rospy_n
     wheel = next(tmp_path.glob("mrs_nav-*.whl"))
     venv = tmp_path / "venv"
     subprocess.run(["/usr/bin/python3", "-m", "venv", str(venv)], check=True, timeout=120)
-    subprocess.run(
-        [str(venv / "bin" / "pip"), "install", "-q", f"{wheel}[monitor]"], check=True, capture_output=True, timeout=900
+    # Nothing from outside the venv may count as installed (a PYTHONPATH holding a checkout with its egg-info would
+    # make pip skip mrs_nav itself and install only its dependencies, exit 0); pip's own words if it goes wrong.
+    outside = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    installed = subprocess.run(
+        [str(venv / "bin" / "pip"), "install", "--ignore-installed", f"{wheel}[monitor]"],
+        env=outside,
+        capture_output=True,
+        text=True,
+        timeout=900,
+        check=False,
     )
+    assert installed.returncode == 0, installed.stdout[-3000:] + installed.stderr[-3000:]
+    assert (venv / "bin" / "mrs-nav").is_file(), installed.stdout[-3000:] + installed.stderr[-3000:]
     absent = subprocess.run(
         [
             str(venv / "bin" / "python"),
