@@ -84,12 +84,11 @@ class PoseEstimate:
 def sample_motion(
     particles: FloatArray, start: Pose2D, end: Pose2D, noise: OdometryNoise, rng: np.random.Generator
 ) -> None:
-    """Move ``(N, 3)`` particles in place by the odometry increment ``start -> end`` with sampled noise."""
+    """Move ``(N, 3)`` particles in place by the odometry increment ``start -> end`` with sampled noise (that of a
+    turn on the spot when it moved less than :data:`mrs_nav.motion_model.IN_PLACE_M`)."""
     rot1, trans, rot2 = decompose(start, end)
     n = len(particles)
-    sd_rot1 = math.sqrt(noise.a1 * rot1**2 + noise.a2 * trans**2)
-    sd_trans = math.sqrt(noise.a3 * trans**2 + noise.a4 * (rot1**2 + rot2**2))
-    sd_rot2 = math.sqrt(noise.a1 * rot2**2 + noise.a2 * trans**2)
+    sd_rot1, sd_trans, sd_rot2 = noise.std_devs(rot1, trans, rot2)
     e = rng.standard_normal((3, n))
     heading = particles[:, 2] + rot1 + sd_rot1 * e[0]
     step = trans + sd_trans * e[1]
