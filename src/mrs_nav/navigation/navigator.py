@@ -26,11 +26,11 @@ the caller's clock (sim time in ROS), distances in metres, angles in radians.
 With ``update(pose, now, defer=True)`` a needed plan is returned as a :class:`PlanRequest` for a worker
 (:meth:`run_plan`, then :meth:`finish_plan`). Meanwhile the robot follows the current path when the plan is only
 an offer (``periodic``) or replaces a path that a new map blocks further on (``blocked``), up to
-``inflation_m`` plus a cell short of the first point of it in the latest map's inflated obstacles, and stands
-still otherwise; no other plan is started. Why: every point of the path before that one is clear of the walls
-by the inflation, and a planner's time budget is wall-clock time, which at a high sim rate would be seconds of
-standing still each time the map grows across the path. A new goal, a cancel or reaching the goal discards the
-request in flight: its outcome is then ignored.
+``inflation_m`` plus a cell short of the first point of it that the robot would touch
+(:attr:`Navigator.collision_grid`), and stands still otherwise; no other plan is started. Why: every point of
+the path before that one is clear of the walls by the robot's radius, and a planner's time budget is wall-clock
+time, which at a high sim rate would be seconds of standing still each time the map grows across the path. A
+new goal, a cancel or reaching the goal discards the request in flight: its outcome is then ignored.
 """
 
 from __future__ import annotations
@@ -114,7 +114,7 @@ class Navigator:
         self._marked_grid: OccupancyGrid | None = None
         self._returns: FloatArray = np.zeros((0, 2))
         self._approach: GoalApproach | None = None
-        self._plan_grid: OccupancyGrid | None = None
+        self._grown: dict[float, OccupancyGrid] = {}  # the marked map's obstacles grown by so much (m)
         self._map_stamp = -math.inf
         self._follower: PathFollower | None = None
         self._holding: str | None = None  # why the robot is held, as last reported
@@ -139,7 +139,7 @@ class Navigator:
         self._grid = grid
         self._obstacles.set_map(grid)
         self._marked_grid = None
-        self._plan_grid = None
+        self._grown = {}
         self._map_stamp = now
         self._policy.new_map()
 
@@ -162,7 +162,7 @@ class Navigator:
 
     def _marks_changed(self) -> None:
         self._marked_grid = None
-        self._plan_grid = None
+        self._grown = {}
         self._policy.new_map()
 
     @property
@@ -182,13 +182,27 @@ class Navigator:
     @property
     def inflated_grid(self) -> OccupancyGrid | None:
         """The last map as planned on: marked, inflated, unknown made free when ``allow_unknown``."""
+        return self._grown_grid(self.config.inflation_m)
+
+    @property
+    def collision_grid(self) -> OccupancyGrid | None:
+        """The last map as the robot itself would touch it: marked, obstacles grown by ``robot_radius`` alone (not
+        ``safety_margin_m``), unknown made free when ``allow_unknown``. A path is blocked only where it crosses
+        this (:mod:`.replanning`): plans keep the whole inflation from obstacles, and the safety margin between the
+        two grids is hysteresis, as the inscribed radius is for move_base (only a lethal or inscribed cell makes a
+        path invalid there; the rest of its inflation is cost)."""
+        return self._grown_grid(self.config.robot_radius)
+
+    def _grown_grid(self, inflation_m: float) -> OccupancyGrid | None:
+        """The marked map with its obstacles grown by ``inflation_m`` (m), unknown made free when ``allow_unknown``
+        (kept until the map or the marks change)."""
         marked = self.marked_grid
         if marked is None:
             return None
-        if self._plan_grid is None:
-            cfg = self.config
-            self._plan_grid = planning_grid(marked, cfg.inflation_m, cfg.allow_unknown)
-        return self._plan_grid
+        grid = self._grown.get(inflation_m)
+        if grid is None:
+            grid = self._grown[inflation_m] = planning_grid(marked, inflation_m, self.config.allow_unknown)
+        return grid
 
     @property
     def goal_yaw(self) -> float | None:
@@ -309,9 +323,9 @@ class Navigator:
         its path that the latest map blocks (module docstring)."""
         if self._pending is None or self._follower is None:
             return False
-        grid, raw = self._maps()
+        grid, raw = self._maps(self.collision_grid)
         rest = self._follower.points[self._follower.segment :]
-        # No exception near the robot: one within the inflation of a wall stands still, as for any other plan.
+        # No exception near the robot: one within its radius of an obstacle stands still, as for any other plan.
         point = first_blocked_point(grid, raw, rest, pose, near_m=0.0)
         margin = self.config.inflation_m + grid.resolution
         return point is not None and math.hypot(point[0] - pose.x, point[1] - pose.y) <= margin
@@ -368,12 +382,12 @@ class Navigator:
         """Why the next :meth:`update` at ``pose`` will plan (``None``: it will not)."""
         if not self._goal.active:
             return None
-        grid, raw = self._maps()
+        grid, raw = self._maps(self.collision_grid)
         return self._policy.reason(self._follower, pose, now, grid, raw)
 
-    def _maps(self) -> tuple[OccupancyGrid, OccupancyGrid]:
-        """The planning grid and the raw map (only called once a map is known)."""
-        grid, raw = self.inflated_grid, self.marked_grid
+    def _maps(self, grid: OccupancyGrid | None = None) -> tuple[OccupancyGrid, OccupancyGrid]:
+        """``grid`` (default: the planning grid) and the raw map (only called once a map is known)."""
+        grid, raw = grid or self.inflated_grid, self.marked_grid
         if grid is None or raw is None:
             raise InvalidInputError("no map received yet")
         return grid, raw

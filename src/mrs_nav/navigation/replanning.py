@@ -3,7 +3,12 @@
 A new plan is made when (in order):
 
 * there is none (a new goal, or the last attempt failed: then ``retry_delay_s`` after it);
-* occupied cells of a new map lie on the rest of the path (``blocked``);
+* the rest of the path comes within the robot's radius of an obstacle of a new map (``blocked``): a plan keeps
+  the whole inflation (the radius plus the safety margin) from obstacles, and what enters that margin alone does
+  not block it. Without that hysteresis a path hugging the inflated corner of a door jamb in a room the map does
+  not know was blocked whenever a mark at the corner moved by a cell (the beams past the corner clear it, the
+  next ones mark it again, the estimate shifts by centimetres), replanned every 2 s, and the robot held for each
+  plan: it stood at the door until the goal was given up;
 * the robot is farther than ``stray_distance_m`` from the rest of the path (``strayed``);
 * the distance to the goal has not shrunk by ``progress_m`` for ``progress_timeout_s`` (``stuck``);
 * every ``replan_period_s`` once the map has changed since the last plan (``periodic``). Such a plan is only
@@ -45,9 +50,10 @@ def densify(points: npt.ArrayLike, step: float) -> FloatArray:
 def first_blocked_point(
     grid: OccupancyGrid, raw: OccupancyGrid, rest: FloatArray, pose: Pose2D, near_m: float
 ) -> FloatArray | None:
-    """The first point (``(2,)``) of the polyline ``rest`` on an occupied cell of ``grid`` (the map inflated for
-    planning), None when the way is clear. Within ``near_m`` of the robot at ``pose`` only ``raw`` (the map
-    before inflation) counts: the robot may legitimately be within the inflation of a wall it is leaving."""
+    """The first point (``(2,)``) of the polyline ``rest`` on an occupied cell of ``grid`` (the map inflated by
+    the robot's radius, :attr:`~mrs_nav.navigation.navigator.Navigator.collision_grid`), None when the way is
+    clear. Within ``near_m`` of the robot at ``pose`` only ``raw`` (the map before inflation) counts: the robot
+    may legitimately be within the inflation of a wall it is leaving."""
     dense = densify(rest, grid.resolution / 2.0)
     near = np.hypot(dense[:, 0] - pose.x, dense[:, 1] - pose.y) <= near_m
     blocked = np.where(near, raw.is_occupied(dense), grid.is_occupied(dense))
@@ -97,7 +103,7 @@ class ReplanPolicy:
         self, follower: PathFollower | None, pose: Pose2D, now: float, grid: OccupancyGrid, raw: OccupancyGrid
     ) -> str | None:
         """Why to plan now for the robot at ``pose`` following ``follower`` (None: no valid path) on the maps
-        ``grid`` (inflated) and ``raw``; ``None`` when not to."""
+        ``grid`` (inflated by the robot's radius) and ``raw``; ``None`` when not to."""
         cfg = self.config
         if follower is None:
             if self.failures == 0:

@@ -142,6 +142,37 @@ def test_motion_sampling_follows_the_odometry_with_the_alphas_spread() -> None:
     assert np.all(particles[:, 2] == 0.0)
 
 
+def test_a_turn_on_the_spot_spreads_the_headings_by_the_turn_alone() -> None:
+    """An in-place turn whose odometry drifted 2 mm: the drift's direction (here 1.97 rad off the heading) is no
+    first rotation of the robot; charged as one, it spread the cloud 0.33 rad and 0.33 m (a goal's wait for a
+    confident localisation then ran out in an unmapped room, where no scan narrows it again)."""
+    rng = np.random.default_rng(0)
+    particles = np.zeros((20000, 3))
+    particles[:, 2] = -1.19
+    sample_motion(particles, Pose2D(0.0, 0.0, -1.19), Pose2D(0.0015, 0.0015, -0.34), OdometryNoise.of([0.02] * 4), rng)
+    assert particles[:, 2].std() == pytest.approx(math.sqrt(0.02) * 0.85, rel=0.05)
+    assert np.hypot(particles[:, 0].std(), particles[:, 1].std()) == pytest.approx(math.sqrt(0.02) * 0.85, rel=0.05)
+
+
+def test_a_turn_taken_in_one_update_spreads_the_cloud_as_in_the_updates_its_thresholds_make() -> None:
+    """The node skips scans it cannot take in time: a 2.2 rad turn seen by one update draws the noise of the four
+    updates update_min_a makes of it (0.16 rad), not one update's (0.31 rad)."""
+    _, grid = office()
+    blind = BeamScan(np.full(4, np.nan), np.linspace(-1.0, 1.0, 4), 0.1, 3.5)  # no beam: the motion alone
+
+    def turned(yaws: list[float]) -> float:
+        pf = ParticleFilter(grid, LocalisationConfig(seed=3, min_particles=5000, max_particles=5000))
+        pf.set_pose(START, np.diag([1e-6, 1e-6, 1e-8]))
+        pf.update(Pose2D(0.0, 0.0, 0.0), blind)
+        for yaw in yaws:
+            assert pf.update(Pose2D(0.0, 0.0, yaw), blind)
+        return float(pf.particles[:, 2].std())
+
+    four = turned([0.55, 1.1, 1.65, 2.2])
+    assert four == pytest.approx(math.sqrt(0.02 * 4) * 0.55, rel=0.1)
+    assert turned([2.2]) == pytest.approx(four, rel=0.1)
+
+
 def test_kld_bound_grows_with_the_occupied_bins() -> None:
     limits = kld_limit(np.array([1, 2, 10, 100]), 0.01, 2.326, 5000)
     assert limits[0] == 5000  # one bin: AMCL keeps drawing

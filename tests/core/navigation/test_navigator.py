@@ -423,7 +423,7 @@ def test_a_deferred_plan_keeps_the_robot_following_its_path_until_adopted() -> N
 def blocked_ahead(planner) -> tuple[Navigator, NavCommand, float]:
     """A navigator on its way from (-1.5, -1.5) to (1.5, -1.5) whose straight path a new map blocks with a wall
     across it at x = 0.5; the command of the step that asks for the replacement plan, and the x where the path
-    first enters the wall's inflation."""
+    first comes within the robot's radius of the wall."""
     nav = Navigator(planner, NavigatorConfig(replan_period_s=1e9, plan_turned_round=False))
     nav.set_map(arena(), 0.0)
     nav.set_goal(NavGoal(1.5, -1.5), 0.0)
@@ -432,7 +432,7 @@ def blocked_ahead(planner) -> tuple[Navigator, NavCommand, float]:
     assert nav.finish_plan(first, nav.run_plan(first)).path is not None
     nav.set_map(with_wall(arena(), 0.5, -1.95, 0.6, 0.5), 0.5)
     xs = np.arange(-1.5, 1.5, 0.01)
-    blocked = nav.inflated_grid.is_occupied(np.column_stack((xs, np.full_like(xs, -1.5))))
+    blocked = nav.collision_grid.is_occupied(np.column_stack((xs, np.full_like(xs, -1.5))))
     return nav, nav.update(Pose2D(-1.5, -1.5, 0.0), 0.5, defer=True), float(xs[np.argmax(blocked)])
 
 
@@ -449,6 +449,32 @@ def test_a_path_blocked_further_on_is_followed_short_of_the_blockage_until_repla
     assert kinds(adopted.events) == [EventKind.PLANNED]
     assert adopted.path[:, 1].max() > 0.5  # around the top of the wall
     assert not np.any(nav.inflated_grid.is_occupied(densify(adopted.path[1:], 0.01)))
+
+
+def test_a_mark_in_the_safety_margin_of_a_path_does_not_block_it() -> None:
+    """Plans keep the robot's radius plus the safety margin from obstacles; a mark that comes within the margin
+    but not within the radius (a door jamb's mark moving by a cell) leaves the path and the robot's drive alone,
+    as move_base's inscribed radius does; one within the radius blocks it."""
+    nav = Navigator(astar, NavigatorConfig(replan_period_s=1e9, plan_turned_round=False))
+    nav.set_map(arena(), 0.0)
+    nav.set_goal(NavGoal(1.5, -1.5), 0.0)
+    first = nav.update(Pose2D(-1.5, -1.5, 0.0), 0.0, defer=True).request
+    assert first is not None
+    path = nav.finish_plan(first, nav.run_plan(first)).path
+    assert path is not None
+    line = float(np.median(path[:, 1]))  # the path runs along a row of cell centres
+    cfg = nav.config
+    in_margin = cfg.robot_radius + cfg.safety_margin_m / 2.0  # from the path's line to the mark's edge
+    nav.set_map(with_wall(arena(), 0.3, line + in_margin + RES / 2.0, 0.4, line + in_margin + 0.2), 0.5)
+    assert nav.inflated_grid.is_occupied(np.array([[0.35, line]]))[0]  # a new plan would keep off it
+    assert not nav.collision_grid.is_occupied(np.array([[0.35, line]]))[0]
+    step = nav.update(Pose2D(-1.0, line, 0.0), 0.5, defer=True)
+    assert step.request is None
+    assert step.u > 0.0
+    nav.set_map(with_wall(arena(), 0.3, line + cfg.robot_radius / 2.0, 0.4, line + 0.3), 1.0)
+    step = nav.update(Pose2D(-1.0, line, 0.0), 1.0, defer=True)
+    assert step.request is not None
+    assert step.request.reason == "blocked"
 
 
 def test_a_blocked_path_whose_replacement_fails_is_not_followed_on() -> None:
