@@ -219,7 +219,8 @@ def _measure(tmp: Path, python: Path, duration: float) -> str:
         )  # fmt: skip
         stack.callback(stop, floor_pub)
         peer_cmd = [sys.executable, "-m", "mrs_nav.ros.bridge_bench_peer", "--out", str(tmp / "peer.json"),
-                    "--duration", str(duration), "--odom-rate", str(RATES["/odom"])]  # fmt: skip
+                    "--duration", str(duration), "--odom-rate", str(RATES["/odom"]), "--no-direct",
+                    "--connections", "1"]  # fmt: skip
         with process(peer_cmd, env, tmp / "peer.log") as peer:
             wall0 = time.monotonic()
             while peer.poll() is None or floor_pub.poll() is None:
@@ -293,7 +294,8 @@ def _report(
         f"{duration:g} s measured after a 1 s warm-up (`--duration`; the issue asks for 10 minutes, this run is "
         f"{'that' if duration >= 600 else 'shorter'}). "
         "Latency = a ROS 2 subscriber's receive time minus the publisher's wall-clock send time (the stamp), one "
-        "machine. Bridged: a rospy publisher -> ros2_bridge (ROS 1 half, pipe, ROS 2 half) -> an rclpy subscriber; "
+        "machine. Bridged: a rospy publisher (nothing else in its process) -> ros2_bridge (its ROS 2 half subscribes "
+        "on ROS 1 itself) -> an rclpy subscriber; "
         "floor: an rclpy publisher -> an rclpy subscriber with the same messages, rates and QoS, on another domain "
         f"at the same time. Both on ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST with Fast DDS.\n\n{table}\n\n"
         f"Loss on the reliable topics (/odom, /map): {lost_reliable}. Bridge (both halves) CPU "

@@ -1,12 +1,15 @@
 """What the ROS 2 bridge's two processes agree on: the routes, their QoS, the frames on the pipe, the child's
-environment.
+environment and how it joins ROS 1.
 
 ROS 1 (Debian's rospy) and ROS 2 (the Jazzy wheels) cannot share a process: both provide ``std_msgs``,
 ``nav_msgs``, ... under the same names. So the ROS 1 half (:mod:`mrs_nav.ros.ros2_bridge_node`) starts the ROS 2
-half (:mod:`mrs_nav.ros2.bridge_half`) in the ROS 2 venv and the two exchange ROS 1 serialised messages over the
-child's stdin (ROS 1 -> ROS 2) and stdout (ROS 2 -> ROS 1). A pipe rather than a socket or Zenoh: nothing to
-listen on or secure, no port to pick, the child dies with its parent (end of file on stdin), and the ROS 1 half
-forwards the bytes rospy received without decoding them (``rospy.AnyMsg``).
+half (:mod:`mrs_nav.ros2.bridge_half`) in the ROS 2 venv. The ROS 2 half subscribes to the outbound routes' ROS 1
+topics itself, as a ROS 1 node of its own without rospy (:mod:`mrs_nav.bridge.tcpros`, named by
+:class:`Ros1Endpoint`): each message goes from its publisher to ROS 2 through one process, where handing rospy's
+bytes over a pipe added a hop between processes to every message. The pipe (the child's stdin and stdout) carries
+what needs rospy: the allow-listed ROS 2 topics into ROS 1 and the NavigateToPose action's exchanges. A pipe rather
+than a socket or Zenoh: nothing to listen on or secure, no port to pick, and the child dies with its parent (end
+of file on stdin).
 
 A frame is ``<channel: uint16><length: uint32><payload>``, little-endian; the channel is the route's index in
 :attr:`Ros2BridgeConfig.routes`.
@@ -202,8 +205,29 @@ def child_environment(config: Ros2BridgeConfig, environ: Mapping[str, str], pack
     return env
 
 
-def child_command(python: Path, config: Ros2BridgeConfig) -> list[str]:
-    return [str(python), "-m", "mrs_nav.ros2.bridge_half", config.to_json()]
+@dataclass(frozen=True)
+class Ros1Endpoint:
+    """How the ROS 2 half joins ROS 1 (:mod:`mrs_nav.bridge.tcpros`): the master's URI, its node name, the host
+    other nodes reach it by and the address it listens on (as rospy finds them for the ROS 1 half), and each
+    outbound channel's ROS 1 topic as the ROS 1 half resolves it (its remappings applied)."""
+
+    master_uri: str
+    caller_id: str
+    host: str
+    bind: str
+    topics: dict[int, str]
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self))
+
+    @classmethod
+    def from_json(cls, text: str) -> Ros1Endpoint:
+        fields = json.loads(text)
+        return cls(**{**fields, "topics": {int(channel): topic for channel, topic in fields["topics"].items()}})
+
+
+def child_command(python: Path, config: Ros2BridgeConfig, endpoint: Ros1Endpoint) -> list[str]:
+    return [str(python), "-m", "mrs_nav.ros2.bridge_half", config.to_json(), endpoint.to_json()]
 
 
 def encode_frame(channel: int, payload: bytes | memoryview) -> bytes:

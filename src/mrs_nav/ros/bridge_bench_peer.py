@@ -59,6 +59,11 @@ def main() -> None:
     parser.add_argument("--connections", type=int, default=2, help="subscribers to wait for per topic")
     parser.add_argument("--namespaces", default="", help="comma-separated robot namespaces (default: none)")
     parser.add_argument("--odom-rate", type=float, default=None, help="Hz of /odom (default: make_messages')")
+    parser.add_argument(
+        "--no-direct",
+        action="store_true",
+        help="publish only (no subscriber in this process, as a floor's publisher has none; 'direct' stays empty)",
+    )
     args = parser.parse_args(rospy.myargv()[1:])
     rospy.init_node("bridge_bench_peer", disable_signals=True)
     messages = {t: m for ns in args.namespaces.split(",") for t, m in make_messages(ns.strip()).items()}
@@ -72,6 +77,7 @@ def main() -> None:
     subs = [
         rospy.Subscriber(t, typ, on_msg, callback_args=t, queue_size=1000, tcp_nodelay=True)
         for t, (typ, _, _) in messages.items()
+        if not args.no_direct
     ]
     pubs = {
         t: rospy.Publisher(t, typ, queue_size=1000, latch=t.endswith("/map")) for t, (typ, _, _) in messages.items()

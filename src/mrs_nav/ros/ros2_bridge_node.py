@@ -1,10 +1,12 @@
-"""Ros2BridgeNode: the ROS 1 half of ros2_bridge; it starts the ROS 2 half and feeds it ROS 1 bytes.
+"""Ros2BridgeNode: the ROS 1 half of ros2_bridge; it starts the ROS 2 half and publishes what comes back.
 
-Each outbound route's ROS 1 topic is subscribed with ``rospy.AnyMsg`` and its serialised bytes go unchanged down
-the child's stdin (:mod:`mrs_nav.bridge.ros2_link`); the ROS 2 half decodes and publishes them. Inbound frames
-(only the allow-listed ROS 2 topics) come back on the child's stdout, are checked (exactly one message of the
-route's type, every number finite) and published on the ROS 1 topic. When the ROS 2 half exits, the node ends
-with an error: roslaunch then reports it (``required`` in the launch file).
+The ROS 2 half subscribes to the outbound routes' ROS 1 topics itself, as the ROS 1 node ``<this node>_ros2_side``
+(:mod:`mrs_nav.bridge.ros2_link` says why); this half tells it the master, the host and each topic's name with
+this node's remappings applied (:class:`~mrs_nav.bridge.ros2_link.Ros1Endpoint`). Inbound frames (only the
+allow-listed ROS 2 topics) come back on the child's stdout, are checked (exactly one message of the route's type,
+every number finite) and published on the ROS 1 topic; the NavigateToPose action goes on to move_base here too.
+When the ROS 2 half exits, the node ends with an error: roslaunch then reports it (``required`` in the launch
+file).
 """
 
 from __future__ import annotations
@@ -16,12 +18,15 @@ import sys
 import threading
 from typing import IO, Any
 
+import rosgraph
+import rosgraph.network
 import rospy
 from roslib.message import get_message_class
 
 from mrs_nav.bridge.decoder import deserialize_exactly, first_non_finite, noetic_store
 from mrs_nav.bridge.ros2_action import ACTION_CHANNEL
 from mrs_nav.bridge.ros2_link import (
+    Ros1Endpoint,
     Ros2BridgeConfig,
     Route,
     child_command,
@@ -36,8 +41,26 @@ from mrs_nav.ros.params import private_params
 from mrs_nav.ros.ros2_bridge_action import MoveBaseForwarder
 
 NODE = "ros2_bridge"
+#: The ROS 2 half's name on ROS 1 is this node's with this suffix.
+ROS2_SIDE_SUFFIX = "_ros2_side"
 # Refusals and drops are logged at most once per this many seconds per topic (with the count).
 DROP_LOG_PERIOD = 5.0
+
+
+def ros1_endpoint(config: Ros2BridgeConfig) -> Ros1Endpoint:
+    """Where and as whom the ROS 2 half subscribes to the outbound topics (as rospy would for this node)."""
+    topics = {
+        channel: rospy.resolve_name(config.ros1_topic(route))
+        for channel, route in enumerate(config.routes)
+        if not route.inbound
+    }
+    return Ros1Endpoint(
+        rosgraph.get_master_uri(),
+        rospy.get_name() + ROS2_SIDE_SUFFIX,
+        rosgraph.network.get_host_name(),
+        rosgraph.network.get_bind_address(),
+        topics,
+    )
 
 
 def load_config() -> Ros2BridgeConfig:
@@ -52,13 +75,12 @@ class Ros2BridgeNode:
 
     def __init__(self, config: Ros2BridgeConfig) -> None:
         self.config = config
-        self.forwarded = 0
         self.refused: dict[str, int] = {}
         python = ros2_python(config.python, os.environ, sys.prefix)
         if not python.exists():
             raise MrsNavError(f"no ROS 2 venv at {python.parent.parent}: make it with `MRS_NAV_ROS2=1 make install`")
         self.child = subprocess.Popen(
-            child_command(python, config),
+            child_command(python, config, ros1_endpoint(config)),
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             env=child_environment(config, os.environ, package_root()),
@@ -68,25 +90,12 @@ class Ros2BridgeNode:
         self._to_child: IO[bytes] = self.child.stdin
         self._lock = threading.Lock()
         self._closing = False
-        self._subscribers: list[Any] = []
         self._publishers: dict[int, tuple[Route, Any, Any]] = {}
         for channel, route in enumerate(config.routes):
-            topic = config.ros1_topic(route)
             if route.inbound:
                 msg_class = get_message_class(route.type)
-                self._publishers[channel] = (route, msg_class, rospy.Publisher(topic, msg_class, queue_size=10))
-            else:
-                # tcp_nodelay: without it Nagle's algorithm holds small messages (odometry) for milliseconds.
-                self._subscribers.append(
-                    rospy.Subscriber(
-                        topic,
-                        rospy.AnyMsg,
-                        self._on_ros1,
-                        callback_args=(channel, route),
-                        queue_size=100,
-                        tcp_nodelay=True,
-                    )
-                )
+                publisher = rospy.Publisher(config.ros1_topic(route), msg_class, queue_size=10)
+                self._publishers[channel] = (route, msg_class, publisher)
         self._action = MoveBaseForwarder(config.action_names[1], self._send) if config.allow_action else None
         self._reader = threading.Thread(target=self._read_child, args=(self.child.stdout,), daemon=True)
         self._reader.start()
@@ -95,17 +104,6 @@ class Ros2BridgeNode:
             "ros2 bridge: ROS 2 half pid %d (%s), domain %d, discovery %s, inbound %s",
             self.child.pid, python, config.domain_id, config.discovery_range, list(config.allow_inbound) or "none",
         )  # fmt: skip
-
-    def _on_ros1(self, msg: rospy.AnyMsg, route_of: tuple[int, Route]) -> None:
-        channel, route = route_of
-        if msg._connection_header.get("type") != route.type:
-            self._refuse(route.ros1, f"type {msg._connection_header.get('type')}, expected {route.type}")
-            return
-        try:
-            self._send(channel, msg._buff)
-            self.forwarded += 1
-        except (BrokenPipeError, ValueError):  # the ROS 2 half is gone; _read_child ends the node
-            pass
 
     def _send(self, channel: int, payload: bytes) -> None:
         frame = encode_frame(channel, payload)
@@ -157,8 +155,6 @@ class Ros2BridgeNode:
         self._closing = True
         if self._action is not None:
             self._action.close()
-        for subscriber in self._subscribers:
-            subscriber.unregister()
         with self._lock, contextlib.suppress(OSError):  # a broken pipe: the ROS 2 half has gone already
             self._to_child.close()  # the ROS 2 half ends at the end of its input
         try:

@@ -1,17 +1,23 @@
-"""The ROS 2 half of ros2_bridge: ROS 1 bytes from stdin out on ROS 2 topics, allowed ROS 2 topics back on stdout.
+"""The ROS 2 half of ros2_bridge: ROS 1 topics out on ROS 2, allowed ROS 2 topics back to the ROS 1 half.
 
-Started by :mod:`mrs_nav.ros.ros2_bridge_node` as ``python -m mrs_nav.ros2.bridge_half CONFIG_JSON`` in the ROS 2
-venv, with ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE set (:func:`mrs_nav.bridge.ros2_link.child_environment`).
-Frames are :mod:`mrs_nav.bridge.ros2_link`'s; logs go to stderr (the ROS 1 node's output). It exits when stdin
-ends (the ROS 1 half is gone). A message that cannot be converted is dropped and counted, never fatal.
+Started by :mod:`mrs_nav.ros.ros2_bridge_node` as ``python -m mrs_nav.ros2.bridge_half CONFIG_JSON ENDPOINT_JSON``
+in the ROS 2 venv, with ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE set
+(:func:`mrs_nav.bridge.ros2_link.child_environment`). It subscribes to the outbound ROS 1 topics as a ROS 1 node
+of its own (:mod:`mrs_nav.bridge.tcpros`) and publishes each message's bytes rewritten as CDR; the allowed inbound
+topics and the NavigateToPose action go through the ROS 1 half in :mod:`mrs_nav.bridge.ros2_link`'s frames on
+stdin and stdout. Logs go to stderr (the ROS 1 node's output). It exits when stdin ends (the ROS 1 half is gone).
+A message that cannot be converted is dropped and counted, never fatal.
 """
 
 from __future__ import annotations
 
+import os
 import signal
 import sys
 import threading
 import time
+import xmlrpc.client
+from functools import partial
 from typing import IO, Any
 
 from rclpy.node import Node
@@ -19,7 +25,8 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profi
 
 from mrs_nav.bridge.ros1_cdr import Ros1ToCdr
 from mrs_nav.bridge.ros2_action import ACTION_CHANNEL, ACTION_NAME
-from mrs_nav.bridge.ros2_link import Qos, Ros2BridgeConfig, Route, encode_frame, read_frame
+from mrs_nav.bridge.ros2_link import Qos, Ros1Endpoint, Ros2BridgeConfig, Route, encode_frame, read_frame
+from mrs_nav.bridge.tcpros import RawSubscriberNode
 from mrs_nav.errors import MrsNavError
 from mrs_nav.ros2.conversions import CONVERSIONS
 from mrs_nav.ros2.messages import codec, fields_of, message_class
@@ -50,18 +57,22 @@ def log(text: str) -> None:
 
 
 class _Drops:
-    """Per-route count of dropped messages, logged at a bounded rate."""
+    """Per-route count of dropped messages, logged at a bounded rate (from any thread)."""
 
     def __init__(self) -> None:
         self.counts: dict[str, int] = {}
         self._logged: dict[str, float] = {}
+        self._lock = threading.Lock()
 
     def drop(self, topic: str, reason: str) -> None:
-        self.counts[topic] = self.counts.get(topic, 0) + 1
-        now = time.monotonic()
-        if now - self._logged.get(topic, -DROP_LOG_PERIOD) >= DROP_LOG_PERIOD:
+        with self._lock:
+            self.counts[topic] = self.counts.get(topic, 0) + 1
+            now = time.monotonic()
+            if now - self._logged.get(topic, -DROP_LOG_PERIOD) < DROP_LOG_PERIOD:
+                return
             self._logged[topic] = now
-            log(f"dropped a message on {topic} ({self.counts[topic]} so far): {reason}")
+            count = self.counts[topic]
+        log(f"dropped a message on {topic} ({count} so far): {reason}")
 
 
 class BridgeHalf:
@@ -78,6 +89,7 @@ class BridgeHalf:
         self.routes = config.routes
         self.publishers: dict[int, Any] = {}
         self._static: dict[str, Any] = {}  # child frame -> its latest static transform
+        self._transforms_lock = threading.Lock()  # each ROS 1 publisher's messages come in a thread of their own
         for channel, route in enumerate(self.routes):
             topic = config.ros2_topic(route)
             cls = message_class(route.published_type)
@@ -92,7 +104,8 @@ class BridgeHalf:
             self.action = NavigateToPoseServer(node, config.action_names[0], self.codec, self._send, log)
 
     def forward(self, channel: int, payload: bytes) -> None:
-        """One frame from the ROS 1 half: decode it and publish on its ROS 2 topic (or give it to the action)."""
+        """One ROS 1 message of an outbound channel (or a frame of the action's from the ROS 1 half): publish it on
+        its ROS 2 topic (or give it to the action). Called from each ROS 1 connection's thread."""
         if channel == ACTION_CHANNEL and self.action is not None:
             try:
                 self.action.deliver(payload)
@@ -113,7 +126,8 @@ class BridgeHalf:
             self.drops.drop(route.ros2, str(err))
             return
         if route.qos in (Qos.TF, Qos.TF_STATIC):
-            msg = self._transforms(route, msg)
+            with self._transforms_lock:
+                msg = self._transforms(route, msg)
             if msg is None:
                 return
         if route.ros2_type:
@@ -160,8 +174,21 @@ class BridgeHalf:
             self.action.close()
 
 
+def _subscribe(ros1: RawSubscriberNode, half: BridgeHalf, endpoint: Ros1Endpoint) -> None:
+    """The outbound channels' ROS 1 topics, each message to :meth:`BridgeHalf.forward`."""
+    for channel, topic in endpoint.topics.items():
+        ros1.subscribe(topic, half.routes[channel].type, partial(half.forward, channel), half.drops.drop)
+
+
+def _shut_down(reason: str) -> None:
+    """The ROS 1 master or a user (rosnode kill) ended this node: the process ends, and the ROS 1 half with it."""
+    log(f"exiting: {reason}")
+    os.kill(os.getpid(), signal.SIGTERM)
+
+
 def main(argv: list[str]) -> int:
     config = Ros2BridgeConfig.from_json(argv[1])
+    endpoint = Ros1Endpoint.from_json(argv[2])
     stdin, stdout = sys.stdin.buffer, sys.stdout.buffer
     sys.stdout = sys.stderr  # stdout carries frames only
     # Ctrl-C at a terminal or roslaunch's SIGINT to the group reaches this process too: it ends when the ROS 1
@@ -170,17 +197,26 @@ def main(argv: list[str]) -> int:
     threads = ACTION_THREADS if config.allow_action else 1
     with spinning_node("ros2_bridge", config.namespace, threads) as node:
         half = BridgeHalf(config, node, stdout)
-        log(
-            f"domain {config.domain_id}, discovery {config.discovery_range}, namespace {config.namespace or '/'}, "
-            f"inbound {list(config.allow_inbound) or 'none'}"
-        )
+        ros1 = RawSubscriberNode(endpoint.master_uri, endpoint.caller_id, endpoint.host, endpoint.bind, log)
         try:
+            try:
+                _subscribe(ros1, half, endpoint)
+            except (OSError, xmlrpc.client.Error, MrsNavError) as err:
+                log(f"cannot subscribe on ROS 1 at {endpoint.master_uri}: {err}")
+                return 1
+            ros1.watch_master(_shut_down)
+            log(
+                f"domain {config.domain_id}, discovery {config.discovery_range}, namespace {config.namespace or '/'}, "
+                f"inbound {list(config.allow_inbound) or 'none'}; on ROS 1 as {endpoint.caller_id}, "
+                f"{len(endpoint.topics)} topics"
+            )
             while (frame := read_frame(stdin)) is not None:
                 half.forward(*frame)
         except MrsNavError as err:
             log(f"pipe from the ROS 1 half broken: {err}")
             return 1
         finally:
+            ros1.close()
             half.close()
     return 0
 
