@@ -111,6 +111,29 @@ def test_a_publisher_that_comes_later_and_a_latched_message_reach_it(rospy_node:
     assert latched.messages == [_serialised(String("published before anyone subscribed"))]
 
 
+def test_a_message_whose_handling_fails_does_not_end_the_topic(rospy_node: Any, raw: RawSubscriberNode) -> None:
+    from std_msgs.msg import String
+
+    rospy = rospy_node
+    inbox = Inbox()
+
+    def fails_on_the_first(payload: bytes) -> None:
+        inbox.take(payload)
+        if len(inbox.messages) == 1:
+            raise RuntimeError("a bug in the handling of one message")
+
+    publisher = rospy.Publisher("/tcpros_test/failing", String, queue_size=10)
+    try:
+        raw.subscribe("/tcpros_test/failing", "std_msgs/String", fails_on_the_first, inbox.refuse)
+        wait_for(lambda: publisher.get_num_connections() == 1, 10.0, "the raw subscriber's connection")
+        publisher.publish(String("first"))
+        publisher.publish(String("second"))
+        wait_for(lambda: len(inbox.messages) == 2, 10.0, "the message after the failed one")
+    finally:
+        publisher.unregister()
+    assert inbox.messages[1] == _serialised(String("second"))
+
+
 def test_a_publisher_of_another_type_is_refused(rospy_node: Any, raw: RawSubscriberNode) -> None:
     from std_msgs.msg import String
 

@@ -45,6 +45,7 @@ RETRY_PERIOD_S = 1.0  # wall s before a failed connection to a listed publisher 
 CALL_TIMEOUT_S = 5.0  # wall s an XML-RPC call or a TCP connect may take
 #: A longer message or connection header is refused (the connection closed): 4000 x 4000 map cells are 16 MB.
 MAX_MESSAGE_BYTES = 256 * 1024 * 1024
+FAILURE_LOG_EVERY = 100  # a callback failing on every message is logged on the 1st, 101st, ... failure
 
 #: The slave API's calls this node answers (each by its ``_api_`` method of the same name in snake case).
 SLAVE_API = (
@@ -295,6 +296,7 @@ class _Link(threading.Thread):
         self.subscription = subscription
         self.publisher = publisher
         self.connected = False
+        self.failures = 0
         self._socket: socket.socket | None = None
         self._stop = threading.Event()
 
@@ -351,4 +353,16 @@ class _Link(threading.Thread):
             self.connected = True
             while (message := read_block(stream)) is not None:
                 for callback in self.subscription.callbacks:
-                    callback(message)
+                    self._deliver(callback, message)
+
+    def _deliver(self, callback: Callback, message: bytes) -> None:
+        """Calls ``callback``; a failure of one message's handling is logged (the first, then every
+        :data:`FAILURE_LOG_EVERY`th), never the end of the connection."""
+        try:
+            callback(message)
+        except Exception as err:  # whatever the handling raised, the topic keeps flowing
+            self.failures += 1
+            if self.failures % FAILURE_LOG_EVERY == 1:
+                self.node.log(
+                    f"{self.subscription.topic}: a message's handling failed ({self.failures} so far): {err!r}"
+                )
