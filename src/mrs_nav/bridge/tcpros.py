@@ -14,10 +14,10 @@ and "ROS/TCPROS"), with the standard library only:
   message at once); then every message is a little-endian ``uint32`` length and the message's ROS 1 bytes.
 
 One thread reads each publisher's connection and calls the subscription's callbacks with the bytes, as rospy does.
-A connection that fails or ends while the master still lists its publisher is tried again every
-:data:`RETRY_PERIOD_S`. The master is asked for its pid every :data:`POLL_PERIOD_S` and a master that restarted
-(:mod:`mrs_nav.master_restart`'s rule) is given every subscription again, as :mod:`mrs_nav.ros.master_watch` does
-for rospy nodes.
+A connection that fails while the master still lists its publisher is tried again every :data:`RETRY_PERIOD_S`;
+one the publisher closes ends (the master says if the publisher comes back). The master is asked for its pid
+every :data:`POLL_PERIOD_S` and a master that restarted (:mod:`mrs_nav.master_restart`'s rule) is given every
+subscription again, as :mod:`mrs_nav.ros.master_watch` does for rospy nodes.
 """
 
 from __future__ import annotations
@@ -179,24 +179,27 @@ class RawSubscriberNode:
         self.publisher_update(subscription.topic, publishers)
 
     def publisher_update(self, topic: str, publishers: list[str]) -> None:
-        """Connects to the listed publishers of ``topic`` not yet connected, drops those no longer listed."""
+        """Connects to the listed publishers of ``topic`` not yet connected.
+
+        A connection to a publisher no longer listed is left to end by itself, as rospy leaves it: a publisher
+        that unregisters closes its connections, and a master that has just restarted lists only the publishers
+        that have registered again so far, while the others still send."""
         with self._lock:
             subscription = self._subscriptions.get(topic)
             if subscription is None or self._closed.is_set():
                 return
             subscription.publishers = frozenset(publishers)
-            for key in [k for k in self._links if k[0] == topic and k[1] not in subscription.publishers]:
-                self._links.pop(key).close()
             for uri in subscription.publishers:
                 if (topic, uri) not in self._links:
                     link = self._links[(topic, uri)] = _Link(self, subscription, uri)
                     link.start()
 
     def wanted(self, link: _Link) -> bool:
-        """Whether ``link``'s publisher is still listed for its topic and the link is still the one for it."""
+        """Whether ``link`` should connect (again): it is the one for its publisher, listed for its topic."""
         with self._lock:
             current = self._links.get((link.subscription.topic, link.publisher))
-            return not self._closed.is_set() and current is link
+            listed = link.publisher in link.subscription.publishers
+            return not self._closed.is_set() and current is link and listed
 
     def forget(self, link: _Link) -> None:
         with self._lock:
