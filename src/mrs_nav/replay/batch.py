@@ -38,6 +38,7 @@ from mrs_nav.replay.session_replay import (
 from mrs_nav.replay.slam_replay import SlamReplay, output_paths, truth_scans, write_outputs
 from mrs_nav.slam.config import MAX_COORDINATE_M, SlamConfig
 from mrs_nav.slam.eval.consistency import doubled_wall_fraction_at
+from mrs_nav.slam.eval.cost import resident_bytes
 from mrs_nav.tables import markdown_table
 
 GOLDEN_SUFFIX = ".golden.json"
@@ -81,6 +82,8 @@ class BagOutcome:
     # Peak resident memory (MB) of the process that ran the job, up to the end of its replay (not the reference
     # map after it, BagJob.reference): the job's own with run_jobs(fresh=True)
     peak_rss_mb: float | None = None
+    # Its resident memory (MB) when the job began: the imports (and earlier jobs' leftovers, in a reused process)
+    start_rss_mb: float | None = None
 
     @property
     def verdict(self) -> str:
@@ -125,6 +128,7 @@ def find_bags(paths: Iterable[Path]) -> list[Path]:
 
 def replay_bag(job: BagJob, progress: Callable[[int], None] | None = None) -> tuple[BagOutcome, SessionReplay]:
     """Replay one bag and write its outputs to ``job.out_dir``; raises :class:`MrsNavError` on bad input."""
+    start = resident_bytes() / 2**20
     config = SlamConfig.from_assignments(list(job.params))
     golden = load_golden(job.golden) if job.golden else None
     with tempfile.TemporaryDirectory(prefix="mrs_nav_replay_") as work:
@@ -155,6 +159,7 @@ def replay_bag(job: BagJob, progress: Callable[[int], None] | None = None) -> tu
         summary=summary,
         notes=tuple(n for n in (note, *_skipped(session)) if n),
         peak_rss_mb=peak,
+        start_rss_mb=start,
     )
     return outcome, session
 
