@@ -318,13 +318,19 @@ class Slam:
                     self._trajectory[-1], node=k, is_node=True, relative=Pose2D(0.0, 0.0, 0.0)
                 )
         self.edges.append(edge)
+        moved = closed.poses != poses
+        if not moved:
+            # Kept without a solve (most closures: the scan was matched onto the old place): no pose changed, so
+            # neither does the map's lag, nor anything made from the node list (its indexes are extended, not
+            # made anew). Copying every node for it cost 3-6 ms a closure on the Intel log, growing with the graph.
+            return False
         self.nodes = [dataclasses.replace(r, pose=p) for r, p in zip(self.nodes, closed.poses, strict=True)]
         self.last = self.nodes[-1]
         self._map_to_odom = self.last.pose.compose(self.last.odom.inverse())
         # Smaller corrections are within a cell of the map; rebuilding costs a pass over every node.
         if self.map_lag() > REBUILD_AFTER_CELLS * self.config.delta:
             self.rebuild_map()
-        return closed.poses != poses
+        return True
 
     def map_lag(self) -> float:
         """How far (m) the poses the map was built from are, at most, from the current estimates."""
