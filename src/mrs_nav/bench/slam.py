@@ -331,7 +331,7 @@ def _intel_verdict(m: _IntelFigures) -> str:
 
 def _cost_lines(m: _IntelFigures) -> str:
     """The verdict lines of the cost along the log and the memory per square metre mapped (issue 40)."""
-    cost, above = m.cost, max(m.peak_mb - m.imports_mb, 0.0)
+    cost, above, held = m.cost, max(m.peak_mb - m.imports_mb, 0.0), m.summary["slam_held_bytes"]
     return (
         f"- CPU per scan along the log: median {cost.first_median_ms:.2f} ms over the first 10 % of the "
         f"{cost.scans} scans, {cost.last_median_ms:.2f} ms over the last 10 %, ratio {cost.growth:.2f}, target "
@@ -340,7 +340,9 @@ def _cost_lines(m: _IntelFigures) -> str:
         f"- memory above the imports: peak RSS {m.peak_mb:.0f} MB less {m.imports_mb:.0f} MB before the log = "
         f"{above:.0f} MB for {m.area_m2:.0f} m^2 mapped (cells seen free or occupied): "
         f"{bytes_per_m2(above * 2**20, m.area_m2) / 1000.0:.0f} kB per m^2 (no line: what a map of another size "
-        "would take; RSS also holds what the first calls load, such as the compiled kernels)\n"
+        "would take; RSS also holds what the first calls load, such as the compiled kernels, and the log's "
+        f"conversion); of it the SLAM's map arrays and the beams kept to rebuild it {held / 2**20:.1f} MB, "
+        f"{bytes_per_m2(held, m.area_m2) / 1000.0:.1f} kB per m^2\n"
     )
 
 

@@ -140,6 +140,7 @@ def run(args: argparse.Namespace) -> str:
         "p95 / median",
         "area mapped [m^2]",
         "above the imports [kB/m^2]",
+        "map + kept beams [kB/m^2]",
         "cost lines",
     ]
     return (
@@ -156,16 +157,15 @@ def run(args: argparse.Namespace) -> str:
         "mapped twice, the second copy where the first never reached); '-' where a bag has no ground truth. "
         f"Cost lines (issue 40): the last 10 % of the scans' median CPU at most {GROWTH_LINE} x the first 10 %'s, "
         f"p95 at most {TAIL_LINE} x the median, peak RSS at most {MEMORY_LINE_MB:.0f} MB; memory above the imports "
-        "is the peak less the job's RSS when it began, per square metre of cells seen free or occupied.\n\n"
-        + markdown_table(header, rows)
-        + "\n"
+        "is the peak less the job's RSS when it began, per square metre of cells seen free or occupied; of it, "
+        "the SLAM's map arrays and the beams kept to rebuild it.\n\n" + markdown_table(header, rows) + "\n"
     )
 
 
 def _row(job: BagJob, outcome: BagOutcome, fixed: int) -> list[object]:
     swept = " ".join(job.params[fixed:])
     if outcome.error is not None:
-        return [job.name, swept, *["-"] * 7, f"error: {outcome.error}", *["-"] * 9]
+        return [job.name, swept, *["-"] * 7, f"error: {outcome.error}", *["-"] * 10]
     summary = outcome.summary
     doubled, at_truth = summary["doubled_wall_fraction"], summary["doubled_wall_fraction_at_truth"]
     duplicated = summary["duplicated_place_fraction"]
@@ -189,11 +189,13 @@ def _row(job: BagJob, outcome: BagOutcome, fixed: int) -> list[object]:
 
 def _cost_cells(outcome: BagOutcome) -> list[object]:
     """The cost columns of a replayed job's row (issue 40): the first and last tenth's medians, their ratio, p95
-    over the median, the area mapped, the memory above the imports per square metre and the verdict."""
+    over the median, the area mapped, the memory above the imports and the map's and kept beams' bytes per square
+    metre, and the verdict."""
     summary, peak, start = outcome.summary, outcome.peak_rss_mb, outcome.start_rss_mb
     area = summary["mapped_area_m2"]
+    held = bytes_per_m2(summary["slam_held_bytes"], area) / 1000.0
     if summary["ms_per_scan_growth"] is None:
-        return ["-", "-", "-", area, "-", "-"]
+        return ["-", "-", "-", area, "-", held, "-"]
     cost = CostAlongLog(
         summary["scans"],
         summary["ms_per_scan_first_tenth_median"],
@@ -209,5 +211,6 @@ def _cost_cells(outcome: BagOutcome) -> list[object]:
         cost.tail,
         area,
         above,
+        held,
         "FAIL: " + "; ".join(failures) if failures else "PASS",
     ]

@@ -150,6 +150,7 @@ class SlamReplay:
             "ms_per_scan_growth": cost.growth if cost else None,
             "ms_per_scan_p95_over_median": cost.tail if cost else None,
             "mapped_area_m2": mapped_area_m2(self.slam.grid),
+            "slam_held_bytes": self.slam.held_bytes,  # the map's arrays and the beams kept to rebuild it
             # CPU time, not wall time: on a shared machine the wall clock measures the neighbours.
             "realtime_factor": self.bag_duration_s / self.cpu_s if self.cpu_s > 0 else None,
             "ate_rmse_m": errors.ate_rmse_m if errors else None,

@@ -156,6 +156,16 @@ class Slam:
         return len(self.nodes) + sum(len(kept) for kept in self._kept)
 
     @property
+    def held_bytes(self) -> int:
+        """Bytes of what grows with the area mapped: the map's arrays (:attr:`LogOddsGrid.nbytes`) and the beams
+        kept to rebuild it (the nodes' and those kept beside them). Not counted: the pose graph's records and edges
+        (a few hundred bytes a node), the local track's two submaps (bounded by their travel) and, in a replay,
+        the trajectory (a record per processed scan: it grows with time, by design)."""
+        beams = sum(r.beams.nbytes for r in self.nodes if r.beams is not None)
+        beams += sum(b.nbytes for kept in self._kept for _, b in kept)
+        return self._grid.nbytes + beams
+
+    @property
     def map_to_odom(self) -> Pose2D:
         """The correction ``map -> odom`` after the last processed scan."""
         return self._map_to_odom

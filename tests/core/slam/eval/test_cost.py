@@ -7,6 +7,7 @@ import pytest
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import Pose2D
+from mrs_nav.slam.config import SlamConfig
 from mrs_nav.slam.eval.cost import (
     GROWTH_LINE,
     bytes_per_m2,
@@ -17,6 +18,8 @@ from mrs_nav.slam.eval.cost import (
 )
 from mrs_nav.slam.grid import LogOddsGrid
 from mrs_nav.slam.scan import LaserScanData, split_beams
+from mrs_nav.slam.slam import Slam
+from tests.core.slam.synthetic import cast
 
 
 def test_a_last_tenth_twice_the_first_reports_two_and_fails():
@@ -103,3 +106,20 @@ def test_resident_bytes_sees_memory_taken():
     block = np.ones(64 * 1024 * 1024 // 8)  # 64 MB written
     assert resident_bytes() - before > 48 * 1024 * 1024
     del block
+
+
+def test_what_the_slam_holds_follows_the_area_not_the_time():
+    slam = Slam(SlamConfig(temporalUpdate=1.0))
+    held = []
+    for lap in range(6):  # back and forth over the same metre of the room, a scan a second
+        for k in range(5):
+            x = 0.25 * (k if lap % 2 == 0 else 4 - k)
+            pose = Pose2D(-2.0 + x, 0.0, 0.0)
+            slam.add_scan(pose, cast(pose), stamp=float(lap * 5 + k))
+        held.append(slam.held_bytes)
+    assert held[0] >= slam.grid.nbytes > 0
+    # After the first laps filled the place's nodes and the scans kept beside them, it holds no more
+    assert held[-1] == held[2]
+    area = mapped_area_m2(slam.grid)
+    assert 10.0 < area < 60.0  # of the 10 m x 6 m room, what 3.5 m beams from a metre of it see
+    assert bytes_per_m2(held[-1], area) < 50_000
