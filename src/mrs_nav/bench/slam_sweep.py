@@ -157,8 +157,11 @@ def run(args: argparse.Namespace) -> str:
         "mapped twice, the second copy where the first never reached); '-' where a bag has no ground truth. "
         f"Cost lines (issue 40): the last 10 % of the scans' median CPU at most {GROWTH_LINE} x the first 10 %'s, "
         f"p95 at most {TAIL_LINE} x the median, peak RSS at most {MEMORY_LINE_MB:.0f} MB; memory above the imports "
-        "is the peak less the job's RSS when it began, per square metre of cells seen free or occupied; of it, "
-        "the SLAM's map arrays and the beams kept to rebuild it.\n\n" + markdown_table(header, rows) + "\n"
+        "is the peak at the replay's end less the RSS when it began, per square metre of cells seen free or "
+        "occupied (an upper bound: it also holds the bag reader's buffers, and the peak may be from before the "
+        "replay); of it, the SLAM's map arrays and the beams kept to rebuild it.\n\n"
+        + markdown_table(header, rows)
+        + "\n"
     )
 
 
@@ -192,6 +195,7 @@ def _cost_cells(outcome: BagOutcome) -> list[object]:
     over the median, the area mapped, the memory above the imports and the map's and kept beams' bytes per square
     metre, and the verdict."""
     summary, peak, start = outcome.summary, outcome.peak_rss_mb, outcome.start_rss_mb
+    replay_peak = outcome.replay_peak_rss_mb
     area = summary["mapped_area_m2"]
     held = bytes_per_m2(summary["slam_held_bytes"], area) / 1000.0
     if summary["ms_per_scan_growth"] is None:
@@ -203,7 +207,9 @@ def _cost_cells(outcome: BagOutcome) -> list[object]:
         summary["ms_per_scan_median"],
         summary["ms_per_scan_p95"],
     )
-    above = "-" if peak is None or start is None else bytes_per_m2(max(peak - start, 0.0) * 2**20, area) / 1000.0
+    above: object = "-"
+    if replay_peak is not None and start is not None:
+        above = bytes_per_m2(max(replay_peak - start, 0.0) * 2**20, area) / 1000.0
     failures = cost_failures(cost, peak)
     return [
         f"{cost.first_median_ms:.2f} / {cost.last_median_ms:.2f}",

@@ -82,8 +82,10 @@ class BagOutcome:
     # Peak resident memory (MB) of the process that ran the job, up to the end of its replay (not the reference
     # map after it, BagJob.reference): the job's own with run_jobs(fresh=True)
     peak_rss_mb: float | None = None
-    # Its resident memory (MB) when the job began: the imports (and earlier jobs' leftovers, in a reused process)
+    # Its resident memory (MB) when the replay began (the imports, the bag opened; in a reused process, earlier
+    # jobs' leftovers) and its peak at the replay's end, before the outputs and figures (the SLAM's own memory)
     start_rss_mb: float | None = None
+    replay_peak_rss_mb: float | None = None
 
     @property
     def verdict(self) -> str:
@@ -128,12 +130,13 @@ def find_bags(paths: Iterable[Path]) -> list[Path]:
 
 def replay_bag(job: BagJob, progress: Callable[[int], None] | None = None) -> tuple[BagOutcome, SessionReplay]:
     """Replay one bag and write its outputs to ``job.out_dir``; raises :class:`MrsNavError` on bad input."""
-    start = resident_bytes() / 2**20
     config = SlamConfig.from_assignments(list(job.params))
     golden = load_golden(job.golden) if job.golden else None
     with tempfile.TemporaryDirectory(prefix="mrs_nav_replay_") as work:
         bag, note = readable_bag(job.bag, Path(work))
+        start = resident_bytes() / 2**20
         session = replay_session(bag, config, job.plan, progress, job.names)
+        replay_peak = _peak_rss_mb()
         result = session.slam
         if not result.estimate:
             skipped = _skipped(session)
@@ -160,6 +163,7 @@ def replay_bag(job: BagJob, progress: Callable[[int], None] | None = None) -> tu
         notes=tuple(n for n in (note, *_skipped(session)) if n),
         peak_rss_mb=peak,
         start_rss_mb=start,
+        replay_peak_rss_mb=replay_peak,
     )
     return outcome, session
 
