@@ -47,6 +47,15 @@ from mrs_nav.slam.eval.consistency import (
     revisit_spread,
     revisit_spread_by_distance,
 )
+from mrs_nav.slam.eval.cost import (
+    GROWTH_LINE,
+    TAIL_LINE,
+    CostAlongLog,
+    bytes_per_m2,
+    cost_along,
+    mapped_area_m2,
+    resident_bytes,
+)
 from mrs_nav.slam.eval.metrics import AffineFit, affine_fit, windowed_ate
 from mrs_nav.slam.eval.relations import Relation, load_relations
 from mrs_nav.slam.eval.sim_drive import OFFICE_LOOP_WAYPOINTS, OFFICE_START, drive_with_slam
@@ -149,7 +158,8 @@ def _office() -> str:
 class _IntelFigures:
     """What the Intel replay measured: the replay's summary, its relations scores, the peak RSS (MB), ATE in
     windows, the affine fit, the revisit spreads (m) of this trajectory and the corrected poses, the table of
-    spreads by distance, and the conversion's notes."""
+    spreads by distance, the conversion's notes, the CPU per scan along the log, the RSS before the replay and the
+    peak at its end (MB) and the area mapped (m^2)."""
 
     summary: dict[str, Any]
     scored: dict[str, Any]
@@ -160,6 +170,10 @@ class _IntelFigures:
     spread_reference: float
     by_distance: str
     notes: tuple[str, ...]
+    cost: CostAlongLog
+    imports_mb: float
+    replay_peak_mb: float
+    area_m2: float
 
 
 def _intel(args: argparse.Namespace, relations: list[Relation]) -> tuple[str, tuple[float, float]]:
@@ -190,7 +204,9 @@ def _measure_intel(args: argparse.Namespace, relations: list[Relation]) -> _Inte
     with tempfile.TemporaryDirectory() as tmp:
         bag = Path(tmp) / "intel.bag"
         conversion = carmen_to_bag(args.log, bag)
+        imports_mb = resident_bytes() / 2**20  # before the replay: the imports and what the conversion left
         result = replay_slam(bag, INTEL_CONFIG)
+        replay_peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # before the figures' maps
     summary = result.summary()
     scored = result.relation_errors(relations)
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
@@ -208,7 +224,19 @@ def _measure_intel(args: argparse.Namespace, relations: list[Relation]) -> _Inte
     spread, spread_reference = revisit_spread(mine, points), revisit_spread(reference, points)
     by_distance = _spread_by_distance(mine, reference, points)
     return _IntelFigures(
-        summary, scored, peak_mb, local_ate, affine, spread, spread_reference, by_distance, tuple(conversion.notes)
+        summary,
+        scored,
+        peak_mb,
+        local_ate,
+        affine,
+        spread,
+        spread_reference,
+        by_distance,
+        tuple(conversion.notes),
+        cost_along(result.ms_per_scan),
+        imports_mb,
+        replay_peak_mb,
+        mapped_area_m2(result.slam.grid),
     )
 
 
@@ -300,7 +328,24 @@ def _intel_verdict(m: _IntelFigures) -> str:
         f"- real-time factor by CPU time {summary['realtime_factor']:.1f}x, target >= {REALTIME_TARGET}x: "
         f"{'PASS' if summary['realtime_factor'] >= REALTIME_TARGET else 'FAIL'}\n"
         f"- peak RSS of the bench process {peak_mb:.0f} MB, target <= {MEMORY_TARGET_MB:.0f} MB: "
-        f"{'PASS' if peak_mb <= MEMORY_TARGET_MB else 'FAIL'}\n"
+        f"{'PASS' if peak_mb <= MEMORY_TARGET_MB else 'FAIL'}\n" + _cost_lines(m)
+    )
+
+
+def _cost_lines(m: _IntelFigures) -> str:
+    """The verdict lines of the cost along the log and the memory per square metre mapped (issue 40)."""
+    cost, above, held = m.cost, max(m.replay_peak_mb - m.imports_mb, 0.0), m.summary["slam_held_bytes"]
+    return (
+        f"- CPU per scan along the log: median {cost.first_median_ms:.2f} ms over the first 10 % of the "
+        f"{cost.scans} scans, {cost.last_median_ms:.2f} ms over the last 10 %, ratio {cost.growth:.2f}, target "
+        f"<= {GROWTH_LINE}: {'PASS' if cost.flat else 'FAIL'}; p95 {cost.p95_ms:.1f} ms = {cost.tail:.2f} x the "
+        f"median {cost.median_ms:.2f} ms, target <= {TAIL_LINE}: {'PASS' if cost.tail_bounded else 'FAIL'}\n"
+        f"- memory above the imports: peak RSS {m.replay_peak_mb:.0f} MB at the replay's end less "
+        f"{m.imports_mb:.0f} MB before it = {above:.0f} MB for {m.area_m2:.0f} m^2 mapped (cells seen free or "
+        f"occupied): {bytes_per_m2(above * 2**20, m.area_m2) / 1000.0:.0f} kB per m^2, an upper bound (it also "
+        "holds the bag reader's buffers and the replay's records, and the peak may be the conversion's); of it the "
+        f"SLAM's map arrays and the beams kept to rebuild it {held / 2**20:.1f} MB, "
+        f"{bytes_per_m2(held, m.area_m2) / 1000.0:.1f} kB per m^2 (no line: what a map of another size would take)\n"
     )
 
 

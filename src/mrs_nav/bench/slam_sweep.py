@@ -27,6 +27,7 @@ from mrs_nav.options import runs_option
 from mrs_nav.replay.batch import BagJob, BagOutcome, run_jobs
 from mrs_nav.slam.config import SlamConfig
 from mrs_nav.slam.eval.consistency import BROKEN_FRACTION, DUPLICATED_LINE, is_broken
+from mrs_nav.slam.eval.cost import GROWTH_LINE, MEMORY_LINE_MB, TAIL_LINE, CostAlongLog, bytes_per_m2, cost_failures
 from mrs_nav.tables import markdown_table
 
 # Corrected logs hold only the scans their SLAM selected: process every one (as `bench slam` does).
@@ -134,6 +135,13 @@ def run(args: argparse.Namespace) -> str:
         "CPU ms/scan median",
         "x real time (CPU)",
         "peak RSS [MB]",
+        "CPU ms/scan median, first / last 10 %",
+        "last / first",
+        "p95 / median",
+        "area mapped [m^2]",
+        "above the imports [kB/m^2]",
+        "map + kept beams [kB/m^2]",
+        "cost lines",
     ]
     return (
         f"### {len(jobs)} SLAM runs: {len(logs)} log(s) x {len(combos)} parameter combination(s)\n\n"
@@ -146,7 +154,12 @@ def run(args: argparse.Namespace) -> str:
         "the scans make at the log's corrected poses says how much of it the scene draws (things that stood on "
         "one pass and were gone on the next, such as a parked car); or more than "
         f"{DUPLICATED_LINE} of the nodes checked found by place elsewhere in the map, twice in a row (places "
-        "mapped twice, the second copy where the first never reached); '-' where a bag has no ground truth.\n\n"
+        "mapped twice, the second copy where the first never reached); '-' where a bag has no ground truth. "
+        f"Cost lines (issue 40): the last 10 % of the scans' median CPU at most {GROWTH_LINE} x the first 10 %'s, "
+        f"p95 at most {TAIL_LINE} x the median, peak RSS at most {MEMORY_LINE_MB:.0f} MB; memory above the imports "
+        "is the peak at the replay's end less the RSS when it began, per square metre of cells seen free or "
+        "occupied (an upper bound: it also holds the bag reader's buffers, and the peak may be from before the "
+        "replay); of it, the SLAM's map arrays and the beams kept to rebuild it.\n\n"
         + markdown_table(header, rows)
         + "\n"
     )
@@ -155,7 +168,7 @@ def run(args: argparse.Namespace) -> str:
 def _row(job: BagJob, outcome: BagOutcome, fixed: int) -> list[object]:
     swept = " ".join(job.params[fixed:])
     if outcome.error is not None:
-        return [job.name, swept, "-", "-", "-", "-", "-", "-", "-", f"error: {outcome.error}", "-", "-", "-"]
+        return [job.name, swept, *["-"] * 7, f"error: {outcome.error}", *["-"] * 10]
     summary = outcome.summary
     doubled, at_truth = summary["doubled_wall_fraction"], summary["doubled_wall_fraction_at_truth"]
     duplicated = summary["duplicated_place_fraction"]
@@ -173,4 +186,37 @@ def _row(job: BagJob, outcome: BagOutcome, fixed: int) -> list[object]:
         summary["ms_per_scan_median"],
         summary["realtime_factor"],
         outcome.peak_rss_mb if outcome.peak_rss_mb is not None else "-",
+        *_cost_cells(outcome),
+    ]
+
+
+def _cost_cells(outcome: BagOutcome) -> list[object]:
+    """The cost columns of a replayed job's row (issue 40): the first and last tenth's medians, their ratio, p95
+    over the median, the area mapped, the memory above the imports and the map's and kept beams' bytes per square
+    metre, and the verdict."""
+    summary, peak, start = outcome.summary, outcome.peak_rss_mb, outcome.start_rss_mb
+    replay_peak = outcome.replay_peak_rss_mb
+    area = summary["mapped_area_m2"]
+    held = bytes_per_m2(summary["slam_held_bytes"], area) / 1000.0
+    if summary["ms_per_scan_growth"] is None:
+        return ["-", "-", "-", area, "-", held, "-"]
+    cost = CostAlongLog(
+        summary["scans"],
+        summary["ms_per_scan_first_tenth_median"],
+        summary["ms_per_scan_last_tenth_median"],
+        summary["ms_per_scan_median"],
+        summary["ms_per_scan_p95"],
+    )
+    above: object = "-"
+    if replay_peak is not None and start is not None:
+        above = bytes_per_m2(max(replay_peak - start, 0.0) * 2**20, area) / 1000.0
+    failures = cost_failures(cost, peak)
+    return [
+        f"{cost.first_median_ms:.2f} / {cost.last_median_ms:.2f}",
+        cost.growth,
+        cost.tail,
+        area,
+        above,
+        held,
+        "FAIL: " + "; ".join(failures) if failures else "PASS",
     ]

@@ -29,6 +29,7 @@ from mrs_nav.geometry import Pose2D
 from mrs_nav.maps.world import load_world
 from mrs_nav.options import number_option, seed_option
 from mrs_nav.resources import WORLDS_DIR
+from mrs_nav.slam.eval.cost import resident_bytes
 from mrs_nav.stack.demo import Demo, DemoConfig
 from mrs_nav.tables import markdown_table
 
@@ -59,12 +60,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="soak mrs-nav demo's stack in this process instead of the ROS nodes (no clock jumps)",
     )
     parser.add_argument("--seed", type=seed_option, default=0, help="seed of the planner (and in-process, the noise)")
-
-
-def resident_bytes() -> int:
-    """This process's resident set size in bytes (Linux /proc)."""
-    with open("/proc/self/statm", encoding="ascii") as statm:
-        return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
 
 
 def lap(demo: Demo) -> Lap:

@@ -38,6 +38,7 @@ from mrs_nav.replay.session_replay import (
 from mrs_nav.replay.slam_replay import SlamReplay, output_paths, truth_scans, write_outputs
 from mrs_nav.slam.config import MAX_COORDINATE_M, SlamConfig
 from mrs_nav.slam.eval.consistency import doubled_wall_fraction_at
+from mrs_nav.slam.eval.cost import resident_bytes
 from mrs_nav.tables import markdown_table
 
 GOLDEN_SUFFIX = ".golden.json"
@@ -81,6 +82,10 @@ class BagOutcome:
     # Peak resident memory (MB) of the process that ran the job, up to the end of its replay (not the reference
     # map after it, BagJob.reference): the job's own with run_jobs(fresh=True)
     peak_rss_mb: float | None = None
+    # Its resident memory (MB) when the replay began (the imports, the bag opened; in a reused process, earlier
+    # jobs' leftovers) and its peak at the replay's end, before the outputs and figures (the SLAM's own memory)
+    start_rss_mb: float | None = None
+    replay_peak_rss_mb: float | None = None
 
     @property
     def verdict(self) -> str:
@@ -129,7 +134,9 @@ def replay_bag(job: BagJob, progress: Callable[[int], None] | None = None) -> tu
     golden = load_golden(job.golden) if job.golden else None
     with tempfile.TemporaryDirectory(prefix="mrs_nav_replay_") as work:
         bag, note = readable_bag(job.bag, Path(work))
+        start = resident_bytes() / 2**20
         session = replay_session(bag, config, job.plan, progress, job.names)
+        replay_peak = _peak_rss_mb()
         result = session.slam
         if not result.estimate:
             skipped = _skipped(session)
@@ -155,6 +162,8 @@ def replay_bag(job: BagJob, progress: Callable[[int], None] | None = None) -> tu
         summary=summary,
         notes=tuple(n for n in (note, *_skipped(session)) if n),
         peak_rss_mb=peak,
+        start_rss_mb=start,
+        replay_peak_rss_mb=replay_peak,
     )
     return outcome, session
 

@@ -42,6 +42,7 @@ from mrs_nav.slam.eval.consistency import (
     free_endpoint_fraction,
     is_broken,
 )
+from mrs_nav.slam.eval.cost import cost_along, mapped_area_m2
 from mrs_nav.slam.eval.metrics import TrajectoryErrors, align_se2, trajectory_errors
 from mrs_nav.slam.eval.relations import Relation, bridged, choose_offset, relation_errors
 from mrs_nav.slam.scan import BeamSplit, split_beams
@@ -126,6 +127,7 @@ class SlamReplay:
         """The JSON summary printed by ``mrs-nav replay --slam --json`` (error fields None without truth)."""
         errors = self.errors()
         ms = np.asarray(self.ms_per_scan) if self.ms_per_scan else np.full(1, math.nan)
+        cost = cost_along(self.ms_per_scan) if self.ms_per_scan else None
         return {
             "scans": len(self.estimate),
             "scans_skipped": self.scans_out_of_order + self.scans_rejected,
@@ -142,6 +144,13 @@ class SlamReplay:
             "map_broken": is_broken(doubled, duplicated),
             "ms_per_scan_median": float(np.median(ms)),
             "ms_per_scan_p95": float(np.percentile(ms, 95)),
+            # Along the log (mrs_nav.slam.eval.cost): the first and last tenth of the scans' medians, their ratio
+            "ms_per_scan_first_tenth_median": cost.first_median_ms if cost else None,
+            "ms_per_scan_last_tenth_median": cost.last_median_ms if cost else None,
+            "ms_per_scan_growth": cost.growth if cost else None,
+            "ms_per_scan_p95_over_median": cost.tail if cost else None,
+            "mapped_area_m2": mapped_area_m2(self.slam.grid),
+            "slam_held_bytes": self.slam.held_bytes,  # the map's arrays and the beams kept to rebuild it
             # CPU time, not wall time: on a shared machine the wall clock measures the neighbours.
             "realtime_factor": self.bag_duration_s / self.cpu_s if self.cpu_s > 0 else None,
             "ate_rmse_m": errors.ate_rmse_m if errors else None,

@@ -128,6 +128,13 @@ class LogOddsGrid:
         """Height, width and the shift of cell (0, 0) into its tile (rows, columns), for the kernels."""
         return self.height, self.width, self.shift_y, self.shift_x
 
+    @property
+    def nbytes(self) -> int:
+        """Bytes of the grid's arrays as allocated: tile tables, out-of-date marks and tile pools (with their room
+        to grow, zeroed lazily: resident only where tiles were taken)."""
+        arrays = (self.table, self.hit_table, self.stale, self.logodds, self.hit_x, self.hit_y, self.hit_count)
+        return sum(int(a.nbytes) for a in arrays)
+
     def cell_of(self, x: FloatArray, y: FloatArray) -> tuple[IntArray, IntArray]:
         """Cell indices ``(ix, iy)`` of points in metres (may lie outside the grid)."""
         ix = np.floor((x - self.origin_x) / self.resolution).astype(np.int64)

@@ -30,14 +30,16 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from mrs_nav.errors import InvalidInputError
 from mrs_nav.geometry import FloatArray, Pose2D, poses_agree
 from mrs_nav.slam.config import MAX_MAP_CELLS, SlamConfig
 from mrs_nav.slam.grid import LogOddsGrid
-from mrs_nav.slam.keyframes import ProcessedScan, apart
+from mrs_nav.slam.grid_kernels import IntArray
+from mrs_nav.slam.keyframes import NodeTable, ProcessedScan, apart
 from mrs_nav.slam.matcher import DistanceField, MatchResult, ScanMatcher, thin_points, window_field
-from mrs_nav.slam.place import Signature, differences, signature
+from mrs_nav.slam.place import SIGNATURE_SIZE, Signature, differences, signature
 
 # What the SLAM does with a verified loop match (Slam's): add the edge from node j to the scan at the laser pose
 # found; None when the optimised graph refused it, else whether the optimisation moved the graph.
@@ -119,7 +121,12 @@ class LoopCloser:
         self._last_closure = 0.0  # travel (m) at the last closure
         # The correction of the estimate (a move of the map frame) that the last far loop match asked for
         self._far_pending: Pose2D | None = None
-        self._signatures: dict[int, Signature | None] = {}  # place signatures of nodes, as far loops ask for them
+        # Place signatures of nodes, as far loops ask for them: a row per node, and per node 0 (not asked for yet),
+        # 1 (its row holds it) or -1 (none: too few points). Rows of one array, not a dict of arrays: the far
+        # search compares the scan with every older node near enough, without a Python pass over them.
+        self._signature_rows: npt.NDArray[np.float32] = np.empty((0, SIGNATURE_SIZE), dtype=np.float32)
+        self._signed: npt.NDArray[np.int8] = np.zeros(0, dtype=np.int8)
+        self._table = NodeTable()  # the nodes' positions and travel, for the searches over them
 
     def due(self, nodes: Sequence[ProcessedScan], travelled: float) -> bool:
         """Whether to look for a loop at ``travelled`` (m) with these ``nodes`` (module doc); an attempt it allows
@@ -140,8 +147,9 @@ class LoopCloser:
         c = self.config
         if thinned.shape[0] < c.min_points:
             return
-        old = [j for j, r in enumerate(nodes) if current.travelled - r.travelled >= c.min_travel_m]
-        if not old:
+        _, travel = self._table.of(nodes)
+        old = np.flatnonzero(current.travelled - travel >= c.min_travel_m)
+        if not old.size:
             return
         near = self._near_match(nodes, current, thinned, old)
         if near is not None and self._close(current, *near, close):
@@ -154,35 +162,42 @@ class LoopCloser:
             self._far_pending = None
 
     def _near_match(
-        self, nodes: Sequence[ProcessedScan], current: ProcessedScan, thinned: FloatArray, old: list[int]
+        self, nodes: Sequence[ProcessedScan], current: ProcessedScan, thinned: FloatArray, old: IntArray
     ) -> tuple[int, MatchResult] | None:
         """A loop match against the submap of the older node nearest the graph's estimate: that node and the
         match, or None."""
         c = self.config
-        j = min(old, key=lambda i: apart(nodes[i].pose, current.pose))
+        xy, travel = self._table.of(nodes)
+        j = int(old[np.argmin(np.hypot(xy[old, 0] - current.pose.x, xy[old, 1] - current.pose.y))])
         nearest = nodes[j]
         if apart(nearest.pose, current.pose) > c.radius_m:
             return None
-        submap = [nodes[i] for i in old if abs(nodes[i].travelled - nearest.travelled) <= c.submap_m]
+        submap = [nodes[i] for i in old[np.abs(travel[old] - nearest.travelled) <= c.submap_m]]
         sensor_prior = current.pose.compose(current.laser_pose)
         match = self._verified_match(self.near_matcher, submap, thinned, sensor_prior)
         return None if match is None else (j, match)
 
     def _far_match(
-        self, nodes: Sequence[ProcessedScan], current: ProcessedScan, thinned: FloatArray, old: list[int]
+        self, nodes: Sequence[ProcessedScan], current: ProcessedScan, thinned: FloatArray, old: IntArray
     ) -> tuple[int, MatchResult] | None:
         """A loop match after a drift too large for the near search (module doc, far loops): at the older node
         within :meth:`far_radius` of the estimate whose place signature is nearest the scan's, matched by place;
         that node and the match when the last attempt's match asked for the same correction of the estimate, else
         None (this one's correction is kept for the next)."""
         pending, self._far_pending = self._far_pending, None
-        within = [j for j in old if apart(nodes[j].pose, current.pose) <= self.far_radius(current, nodes[j])]
+        xy, travel = self._table.of(nodes)
+        distance = np.hypot(xy[old, 0] - current.pose.x, xy[old, 1] - current.pose.y)
+        # far_radius of each older node
+        radius = self.config.radius_m + self.config.far_drift * (current.travelled - travel[old])
+        within = old[distance <= radius]
         mine = signature(thinned)
-        signed = [(j, s) for j in within if (s := self.signature_of(nodes, j)) is not None]
-        if mine is None or not signed:
+        self._grow_signatures(len(nodes))
+        for k in within[self._signed[within] == 0]:
+            self.signature_of(nodes, int(k))
+        signed = within[self._signed[within] > 0]
+        if mine is None or not signed.size:
             return None
-        scores = differences(mine, np.array([s for _, s in signed]))
-        j = signed[int(np.argmin(scores))][0]
+        j = int(signed[int(np.argmin(differences(mine, self._signature_rows[signed])))])
         estimate = current.pose.compose(current.laser_pose)
         match = self.match_at_node(nodes, j, old, thinned, estimate.yaw)
         if match is None:
@@ -213,7 +228,12 @@ class LoopCloser:
         return self.config.radius_m + self.config.far_drift * (current.travelled - older.travelled)
 
     def match_at_node(
-        self, nodes: Sequence[ProcessedScan], j: int, others: list[int], points: FloatArray, heading: float
+        self,
+        nodes: Sequence[ProcessedScan],
+        j: int,
+        others: Sequence[int] | IntArray,
+        points: FloatArray,
+        heading: float,
     ) -> MatchResult | None:
         """Where the scan ``points`` (thinned, laser frame) fits round node ``j``'s laser position at the laser
         heading ``heading``: matched (:attr:`LoopConfig.far_search_m`, :attr:`LoopConfig.search_rad`) against the
@@ -222,21 +242,37 @@ class LoopCloser:
         where it does not fit so."""
         c = self.config
         place = nodes[j]
-        submap = sorted(
-            (nodes[i] for i in others if apart(nodes[i].pose, place.pose) <= c.far_submap_m),
-            key=lambda r: apart(r.pose, place.pose),
-        )[: c.far_submap_nodes]
+        xy, _ = self._table.of(nodes)
+        near = np.asarray(others, dtype=np.int64)
+        distance = np.hypot(xy[near, 0] - place.pose.x, xy[near, 1] - place.pose.y)
+        keep = distance <= c.far_submap_m
+        near, distance = near[keep], distance[keep]
+        submap = [nodes[i] for i in near[np.argsort(distance, kind="stable")][: c.far_submap_nodes]]
         there = place.pose.compose(place.laser_pose)
         return self._verified_match(self.far_matcher, submap, points, Pose2D(there.x, there.y, heading))
 
     def signature_of(self, nodes: Sequence[ProcessedScan], j: int) -> Signature | None:
         """Node ``j``'s place signature (:mod:`mrs_nav.slam.place`), computed when first asked for (a node's beams
         never change, only its pose)."""
-        if j not in self._signatures:
+        self._grow_signatures(len(nodes))
+        if self._signed[j] == 0:
             beams = nodes[j].beams
             points = thin_points(beams.split().hit_points, self._delta) if beams is not None else np.empty((0, 2))
-            self._signatures[j] = signature(points)
-        return self._signatures[j]
+            found = signature(points)
+            self._signed[j] = -1 if found is None else 1
+            if found is not None:
+                self._signature_rows[j] = found
+        return self._signature_rows[j] if self._signed[j] > 0 else None
+
+    def _grow_signatures(self, nodes: int) -> None:
+        """Room for the signatures of ``nodes`` nodes (doubled when full: O(nodes) copies over a log in all)."""
+        if nodes > len(self._signed):
+            size = max(nodes, 2 * len(self._signed))
+            rows = np.empty((size, SIGNATURE_SIZE), dtype=np.float32)  # 2 KB a node
+            signed = np.zeros(size, dtype=np.int8)
+            rows[: len(self._signed)] = self._signature_rows
+            signed[: len(self._signed)] = self._signed
+            self._signature_rows, self._signed = rows, signed
 
     def _verified_match(
         self, matcher: ScanMatcher, submap: list[ProcessedScan], thinned: FloatArray, prior: Pose2D

@@ -26,6 +26,7 @@ SIGNATURE_REACH_M = 16.0  # m: pairs farther apart, or farther out, fall into th
 
 _PAIR_BINS = round(SIGNATURE_REACH_M / PAIR_STEP_M)
 _RANGE_BINS = round(SIGNATURE_REACH_M / RANGE_STEP_M)
+SIGNATURE_SIZE = _PAIR_BINS * _RANGE_BINS  # values in a signature
 
 Signature = npt.NDArray[np.float32]
 

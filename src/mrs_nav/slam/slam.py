@@ -156,6 +156,16 @@ class Slam:
         return len(self.nodes) + sum(len(kept) for kept in self._kept)
 
     @property
+    def held_bytes(self) -> int:
+        """Bytes of what grows with the area mapped: the map's arrays (:attr:`LogOddsGrid.nbytes`) and the beams
+        kept to rebuild it (the nodes' and those kept beside them). Not counted: the pose graph's records and edges
+        (a few hundred bytes a node), the local track's two submaps (bounded by their travel) and, in a replay,
+        the trajectory (a record per processed scan: it grows with time, by design)."""
+        beams = sum(r.beams.nbytes for r in self.nodes if r.beams is not None)
+        beams += sum(b.nbytes for kept in self._kept for _, b in kept)
+        return self._grid.nbytes + beams
+
+    @property
     def map_to_odom(self) -> Pose2D:
         """The correction ``map -> odom`` after the last processed scan."""
         return self._map_to_odom
@@ -318,13 +328,19 @@ class Slam:
                     self._trajectory[-1], node=k, is_node=True, relative=Pose2D(0.0, 0.0, 0.0)
                 )
         self.edges.append(edge)
+        moved = closed.poses != poses
+        if not moved:
+            # Kept without a solve (most closures: the scan was matched onto the old place): no pose changed, so
+            # neither does the map's lag, nor anything made from the node list (its indexes are extended, not
+            # made anew). Copying every node for it cost 3-6 ms a closure on the Intel log, growing with the graph.
+            return False
         self.nodes = [dataclasses.replace(r, pose=p) for r, p in zip(self.nodes, closed.poses, strict=True)]
         self.last = self.nodes[-1]
         self._map_to_odom = self.last.pose.compose(self.last.odom.inverse())
         # Smaller corrections are within a cell of the map; rebuilding costs a pass over every node.
         if self.map_lag() > REBUILD_AFTER_CELLS * self.config.delta:
             self.rebuild_map()
-        return closed.poses != poses
+        return True
 
     def map_lag(self) -> float:
         """How far (m) the poses the map was built from are, at most, from the current estimates."""

@@ -39,6 +39,15 @@ def test_two_logs_by_two_values_in_parallel_equal_the_serial_sweep(
     peaks = [float(row[0]) for row in _rows(serial_section, slice(12, 13))]
     assert len(peaks) == 4
     assert all(50.0 < peak < 2000.0 for peak in peaks)
+    # The cost along the log (issue 40): the tenths' medians, their ratio, the tail, the area and the verdict
+    for first_last, growth, tail, area, per_m2, held, lines in _rows(serial_section, slice(13, 20)):
+        first, last = (float(v) for v in first_last.split(" / "))
+        assert float(growth) == pytest.approx(last / first, rel=0.01, abs=0.01)
+        assert float(tail) >= 1.0
+        assert 10.0 < float(area) < 400.0  # the synthetic room's floor, a few metres a side, and what its walls hide
+        assert float(per_m2) >= 0.0
+        assert float(held) > 4.0 / 0.05**2 / 1000.0  # kB/m^2: 4 bytes of log-odds a cell seen, at least
+        assert lines == "PASS" or lines.startswith("FAIL: ")
     assert [row[:2] for row in serial] == [
         ["room1", "delta=0.05"],
         ["room1", "delta=0.1"],

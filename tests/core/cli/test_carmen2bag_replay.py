@@ -53,6 +53,12 @@ def test_carmen2bag_then_replay(excerpt, tmp_path, capsys):
         "map_broken",
         "ms_per_scan_median",
         "ms_per_scan_p95",
+        "ms_per_scan_first_tenth_median",
+        "ms_per_scan_last_tenth_median",
+        "ms_per_scan_growth",
+        "ms_per_scan_p95_over_median",
+        "mapped_area_m2",
+        "slam_held_bytes",
         "realtime_factor",
         "ate_rmse_m",
         "ate_rmse_deg",
@@ -64,6 +70,11 @@ def test_carmen2bag_then_replay(excerpt, tmp_path, capsys):
     assert summary["scans"] == SCANS
     assert summary["rpe_trans_mean_m"] < 0.07
     assert summary["realtime_factor"] > 15
+    assert summary["ms_per_scan_growth"] == pytest.approx(
+        summary["ms_per_scan_last_tenth_median"] / summary["ms_per_scan_first_tenth_median"]
+    )
+    assert 0.0 < summary["mapped_area_m2"] < 2500.0  # the excerpt maps part of a 30 m x 30 m floor
+    assert summary["slam_held_bytes"] > 4 * summary["mapped_area_m2"] / 0.05**2  # 4 bytes a cell seen, at least
     assert Path(summary["map_yaml"]).is_file()
     assert (out / "slam_map.pgm").is_file()
     assert (out / "slam_map.png").is_file()
