@@ -128,6 +128,16 @@ class _XmlRpcServer(socketserver.ThreadingMixIn, SimpleXMLRPCServer):
     allow_reuse_address = True
 
 
+class _XmlRpcServer6(_XmlRpcServer):
+    address_family = socket.AF_INET6
+
+
+def _server_for(bind: str) -> _XmlRpcServer:
+    """This node's XML-RPC server on a free port of ``bind`` (an IPv6 address with ROS_IPV6=on, as rospy's)."""
+    server_class = _XmlRpcServer6 if ":" in bind else _XmlRpcServer
+    return server_class((bind, 0), logRequests=False, allow_none=True)
+
+
 class RawSubscriberNode:
     """A ROS 1 node named ``caller_id`` with subscriptions only (see the module docstring).
 
@@ -142,10 +152,11 @@ class RawSubscriberNode:
         self._closed = threading.Event()
         self._subscriptions: dict[str, Subscription] = {}
         self._links: dict[tuple[str, str], _Link] = {}
-        self._server = _XmlRpcServer((bind, 0), logRequests=False, allow_none=True)
+        self._server = _server_for(bind)
         for wire_name in SLAVE_API:
             self._server.register_function(getattr(self, "_api_" + _snake(wire_name)), wire_name)
-        self.uri = f"http://{host}:{self._server.server_address[1]}/"
+        named = f"[{host}]" if ":" in host else host  # an IPv6 address in a URI is bracketed
+        self.uri = f"http://{named}:{self._server.server_address[1]}/"
         self._on_shutdown: Callable[[str], None] = lambda reason: None
         threading.Thread(target=self._server.serve_forever, name="tcpros-xmlrpc", daemon=True).start()
 

@@ -1,15 +1,18 @@
-"""TCPROS framing (mrs_nav.bridge.tcpros): connection headers and length-prefixed blocks, against rospy's own
-encoding of a header and against broken input."""
+"""TCPROS framing (mrs_nav.bridge.tcpros): connection headers and length-prefixed blocks, against the ROS wiki's
+encoding of a header and against broken input; the node's slave API reached over IPv4 and IPv6 loopback."""
 
 from __future__ import annotations
 
 import io
+import os
 import struct
+import xmlrpc.client
 
 import pytest
 
 from mrs_nav.bridge.tcpros import (
     MAX_MESSAGE_BYTES,
+    RawSubscriberNode,
     decode_header,
     encode_header,
     read_block,
@@ -63,3 +66,16 @@ def test_blocks_are_read_one_after_another_until_a_clean_end() -> None:
 def test_a_connection_cut_inside_a_block_or_an_oversized_one_is_refused(data: bytes, what: str) -> None:
     with pytest.raises(InvalidInputError, match=what):
         read_block(io.BytesIO(data))
+
+
+@pytest.mark.parametrize("loopback", ["127.0.0.1", "::1"])
+def test_the_slave_api_answers_on_ipv4_and_ipv6(loopback: str) -> None:
+    # no master needed until something is subscribed
+    node = RawSubscriberNode("http://127.0.0.1:1/", "/tcpros_api", loopback, loopback, print)
+    try:
+        proxy = xmlrpc.client.ServerProxy(node.uri)
+        assert proxy.getPid("/pytest") == [1, "", os.getpid()]
+        assert proxy.getSubscriptions("/pytest") == [1, "", []]
+        assert proxy.requestTopic("/pytest", "/odom", [["TCPROS"]])[0] == -1
+    finally:
+        node.close()
