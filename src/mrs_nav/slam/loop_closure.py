@@ -187,9 +187,7 @@ class LoopCloser:
         pending, self._far_pending = self._far_pending, None
         xy, travel = self._table.of(nodes)
         distance = np.hypot(xy[old, 0] - current.pose.x, xy[old, 1] - current.pose.y)
-        # far_radius of each older node
-        radius = self.config.radius_m + self.config.far_drift * (current.travelled - travel[old])
-        within = old[distance <= radius]
+        within = old[distance <= self.far_radius(current, travel[old])]
         mine = signature(thinned)
         self._grow_signatures(len(nodes))
         for k in within[self._signed[within] == 0]:
@@ -222,10 +220,11 @@ class LoopCloser:
         self._far_pending = None
         return True
 
-    def far_radius(self, current: ProcessedScan, older: ProcessedScan) -> float:
-        """How far (m) from the estimate of ``current`` the estimate of an ``older`` node may have drifted:
-        :attr:`LoopConfig.radius_m` plus :attr:`LoopConfig.far_drift` of the travel between them."""
-        return self.config.radius_m + self.config.far_drift * (current.travelled - older.travelled)
+    def far_radius(self, current: ProcessedScan, older_travel: FloatArray) -> FloatArray:
+        """How far (m) from the estimate of ``current`` the estimates of older nodes, at travel ``older_travel``
+        (m), may have drifted: :attr:`LoopConfig.radius_m` plus :attr:`LoopConfig.far_drift` of the travel between
+        them."""
+        return self.config.radius_m + self.config.far_drift * (current.travelled - older_travel)
 
     def match_at_node(
         self,
