@@ -223,11 +223,16 @@ def node_pid(uri: str, node: str, timeout: float = 10.0) -> int:
     return int(reply[2])
 
 
+def resident_bytes(pid: int | str = "self") -> int:
+    """Resident set size now (bytes) of process ``pid`` (this one by default), from Linux /proc."""
+    with open(f"/proc/{pid}/statm", encoding="ascii") as statm:
+        return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+
+
 def process_usage(pid: int) -> tuple[int, float]:
     """(resident set size in bytes, CPU seconds in user and kernel mode) of process ``pid``, from Linux /proc."""
     try:
-        with open(f"/proc/{pid}/statm", encoding="ascii") as statm:
-            rss = int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+        rss = resident_bytes(pid)
         with open(f"/proc/{pid}/stat", encoding="ascii") as stat:
             # fields after the command name, which is in parentheses and may hold spaces: utime and stime are the
             # 14th and 15th fields of the line, the 12th and 13th after the closing parenthesis

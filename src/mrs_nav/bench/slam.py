@@ -37,6 +37,7 @@ from mrs_nav.geometry import FloatArray, Pose2D
 from mrs_nav.maps.world import load_world
 from mrs_nav.replay.slam_replay import replay_slam
 from mrs_nav.resources import CHECKOUT, WORLDS_DIR
+from mrs_nav.ros_processes import resident_bytes
 from mrs_nav.sim.simulator import SimulatorConfig
 from mrs_nav.slam.config import SlamConfig
 from mrs_nav.slam.eval.consistency import (
@@ -54,7 +55,6 @@ from mrs_nav.slam.eval.cost import (
     bytes_per_m2,
     cost_along,
     mapped_area_m2,
-    resident_bytes,
 )
 from mrs_nav.slam.eval.metrics import AffineFit, affine_fit, windowed_ate
 from mrs_nav.slam.eval.relations import Relation, load_relations

@@ -29,7 +29,7 @@ from mrs_nav.geometry import Pose2D
 from mrs_nav.maps.world import load_world
 from mrs_nav.options import number_option, seed_option
 from mrs_nav.resources import WORLDS_DIR
-from mrs_nav.slam.eval.cost import resident_bytes
+from mrs_nav.ros_processes import resident_bytes
 from mrs_nav.stack.demo import Demo, DemoConfig
 from mrs_nav.tables import markdown_table
 

@@ -36,9 +36,9 @@ from mrs_nav.replay.session_replay import (
     write_session_outputs,
 )
 from mrs_nav.replay.slam_replay import SlamReplay, output_paths, truth_scans, write_outputs
+from mrs_nav.ros_processes import resident_bytes
 from mrs_nav.slam.config import MAX_COORDINATE_M, SlamConfig
 from mrs_nav.slam.eval.consistency import doubled_wall_fraction_at
-from mrs_nav.slam.eval.cost import resident_bytes
 from mrs_nav.tables import markdown_table
 
 GOLDEN_SUFFIX = ".golden.json"

@@ -11,7 +11,6 @@ that of the first (a cost that grows with the map or the pose graph shows there 
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -101,9 +100,3 @@ def cost_failures(cost: CostAlongLog, peak_mb: float | None = None) -> list[str]
     if peak_mb is not None and peak_mb > MEMORY_LINE_MB:
         failures.append(f"peak RSS {peak_mb:.0f} MB > {MEMORY_LINE_MB:.0f} MB")
     return failures
-
-
-def resident_bytes() -> int:
-    """This process's resident set size now, in bytes (Linux /proc)."""
-    with open("/proc/self/statm", encoding="ascii") as statm:
-        return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")

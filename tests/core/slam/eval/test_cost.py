@@ -14,7 +14,6 @@ from mrs_nav.slam.eval.cost import (
     cost_along,
     cost_failures,
     mapped_area_m2,
-    resident_bytes,
 )
 from mrs_nav.slam.grid import LogOddsGrid
 from mrs_nav.slam.scan import LaserScanData, split_beams
@@ -99,13 +98,6 @@ def test_the_failures_name_each_line_broken():
     assert cost_failures(grown, 600.0) == ["last/first tenth 2.00 > 1.2", "peak RSS 600 MB > 500 MB"]
     spiky = cost_along([5.0 if i % 10 else 20.0 for i in range(100)])
     assert cost_failures(spiky) == ["p95/median 4.00 > 3.0"]
-
-
-def test_resident_bytes_sees_memory_taken():
-    before = resident_bytes()
-    block = np.ones(64 * 1024 * 1024 // 8)  # 64 MB written
-    assert resident_bytes() - before > 48 * 1024 * 1024
-    del block
 
 
 def test_what_the_slam_holds_follows_the_area_not_the_time():
