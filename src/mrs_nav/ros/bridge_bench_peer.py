@@ -22,6 +22,7 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import LaserScan
 
 from mrs_nav.atomic_write import write_text
+from mrs_nav.bench.pacing import start_on_grid
 from mrs_nav.ros.map_messages import OccupancyGridArrayMsg
 
 WARMUP = 1.0  # s published before measuring, so every connection is established
@@ -64,6 +65,7 @@ def main() -> None:
         action="store_true",
         help="publish only (no subscriber in this process, as a floor's publisher has none; 'direct' stays empty)",
     )
+    parser.add_argument("--phase", type=float, default=0.0, help="s past a whole second to start at (bench.pacing)")
     args = parser.parse_args(rospy.myargv()[1:])
     rospy.init_node("bridge_bench_peer", disable_signals=True)
     messages = {t: m for ns in args.namespaces.split(",") for t, m in make_messages(ns.strip()).items()}
@@ -90,7 +92,7 @@ def main() -> None:
     sent: dict[str, list[int]] = {t: [] for t in messages}
     stamps: dict[str, list[int]] = {t: [] for t in messages}  # ns, of the measured messages
     first: dict[str, int] = {}
-    start = time.monotonic() + 0.2
+    start = start_on_grid(args.phase)
 
     def publish(topic: str) -> None:
         _, msg, rate = messages[topic]

@@ -28,6 +28,7 @@ from rclpy.action import ActionClient
 from rclpy.node import Node
 from sensor_msgs.msg import LaserScan
 
+from mrs_nav.bench.pacing import start_on_grid
 from mrs_nav.bridge.ros2_link import OUTBOUND
 from mrs_nav.ros2.bridge_half import QOS
 from mrs_nav.ros2.runtime import spinning_node
@@ -69,7 +70,7 @@ def subscribe(node: Node, out: Path, ready: Path, wait_publishers: bool) -> None
     out.write_text(json.dumps(received))
 
 
-def publish(node: Node, out: Path, duration: float, warmup: float, subscribers: int) -> None:
+def publish(node: Node, out: Path, duration: float, warmup: float, subscribers: int, *, phase: float) -> None:
     publishers = {t: node.create_publisher(_TYPES[t], t, _QOS[t]) for t in RATES}
     deadline = time.monotonic() + 60.0
     while any(p.get_subscription_count() < subscribers for p in publishers.values()):
@@ -78,7 +79,7 @@ def publish(node: Node, out: Path, duration: float, warmup: float, subscribers: 
         time.sleep(0.05)
     msgs = messages()
     sent: dict[str, list[int]] = {t: [] for t in RATES}
-    start = time.monotonic() + 0.2
+    start = start_on_grid(phase)
 
     def run(topic: str) -> None:
         msg, rate, k = msgs[topic], RATES[topic], 0
@@ -149,6 +150,7 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--duration", type=float, default=60.0)
     parser.add_argument("--warmup", type=float, default=1.0)
     parser.add_argument("--subscribers", type=int, default=1)
+    parser.add_argument("--phase", type=float, default=0.0, help="pub: s past a whole second to start at")
     parser.add_argument("--wait-publishers", action="store_true", help="sub: ready once every topic has one")
     parser.add_argument("--goal", type=float, nargs=2, default=(0.0, 0.0), help="navigate: x y in map (m)")
     parser.add_argument("--after", type=Path, help="navigate: send the goal once this file exists")
@@ -158,7 +160,7 @@ def main(argv: list[str]) -> int:
         if args.mode == "sub":
             subscribe(node, args.out, args.ready or args.out.with_suffix(".ready"), args.wait_publishers)
         elif args.mode == "pub":
-            publish(node, args.out, args.duration, args.warmup, args.subscribers)
+            publish(node, args.out, args.duration, args.warmup, args.subscribers, phase=args.phase)
         else:
             navigate(node, args.out, tuple(args.goal), args.after, args.timeout)
     return 0
