@@ -12,9 +12,13 @@ from __future__ import annotations
 import math
 import time
 
+from mrs_nav.options import number_option
+
 #: Every bench rate (/odom 50 or 100 Hz, /scan 5 Hz, /map 1 Hz) repeats within one second.
 GRID_S = 1.0
 LEAD_S = 0.2  # at least this long from now to the first message: the caller's threads start meanwhile
+#: A publisher's ``--phase`` (s past a whole second): finite, within one grid step.
+phase_option = number_option(0.0, GRID_S)
 
 
 def start_on_grid(phase: float, now: float | None = None) -> float:

@@ -22,7 +22,7 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import LaserScan
 
 from mrs_nav.atomic_write import write_text
-from mrs_nav.bench.pacing import start_on_grid
+from mrs_nav.bench.pacing import phase_option, start_on_grid
 from mrs_nav.ros.map_messages import OccupancyGridArrayMsg
 
 WARMUP = 1.0  # s published before measuring, so every connection is established
@@ -65,7 +65,7 @@ def main() -> None:
         action="store_true",
         help="publish only (no subscriber in this process, as a floor's publisher has none; 'direct' stays empty)",
     )
-    parser.add_argument("--phase", type=float, default=0.0, help="s past a whole second to start at (bench.pacing)")
+    parser.add_argument("--phase", type=phase_option, default=0.0, help="s past a whole second to start at")
     args = parser.parse_args(rospy.myargv()[1:])
     rospy.init_node("bridge_bench_peer", disable_signals=True)
     messages = {t: m for ns in args.namespaces.split(",") for t, m in make_messages(ns.strip()).items()}

@@ -28,7 +28,7 @@ from rclpy.action import ActionClient
 from rclpy.node import Node
 from sensor_msgs.msg import LaserScan
 
-from mrs_nav.bench.pacing import start_on_grid
+from mrs_nav.bench.pacing import phase_option, start_on_grid
 from mrs_nav.bridge.ros2_link import OUTBOUND
 from mrs_nav.ros2.bridge_half import QOS
 from mrs_nav.ros2.runtime import spinning_node
@@ -150,7 +150,7 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--duration", type=float, default=60.0)
     parser.add_argument("--warmup", type=float, default=1.0)
     parser.add_argument("--subscribers", type=int, default=1)
-    parser.add_argument("--phase", type=float, default=0.0, help="pub: s past a whole second to start at")
+    parser.add_argument("--phase", type=phase_option, default=0.0, help="pub: s past a whole second to start at")
     parser.add_argument("--wait-publishers", action="store_true", help="sub: ready once every topic has one")
     parser.add_argument("--goal", type=float, nargs=2, default=(0.0, 0.0), help="navigate: x y in map (m)")
     parser.add_argument("--after", type=Path, help="navigate: send the goal once this file exists")

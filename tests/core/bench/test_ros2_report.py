@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import argparse
 import os
 
-from mrs_nav.bench.pacing import LEAD_S, start_on_grid
+import pytest
+
+from mrs_nav.bench.pacing import LEAD_S, phase_option, start_on_grid
 from mrs_nav.bench.ros2 import FLOOR_PHASE_S, RATES, _latencies, _report, chain_gap_s, descendants
 
 
@@ -55,6 +58,12 @@ def test_a_start_on_the_grid_is_its_phase_past_a_whole_second_and_far_enough_ahe
     # two processes asking at different times keep the phase apart on the 50 Hz grid
     a, b = start_on_grid(0.0, 5.01), start_on_grid(FLOOR_PHASE_S, 5.73)
     assert abs((b - a) % (1 / RATES["/odom"]) - FLOOR_PHASE_S) < 1e-9
+
+
+@pytest.mark.parametrize("text", ["nan", "-0.01", "1.5", "inf", "ten"])
+def test_a_phase_that_is_not_a_finite_part_of_a_second_is_refused(text: str) -> None:
+    with pytest.raises(argparse.ArgumentTypeError):
+        phase_option(text)
 
 
 def test_chains_sent_at_the_same_instants_are_not_a_valid_comparison() -> None:
